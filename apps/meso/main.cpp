@@ -1,0 +1,105 @@
+// meso: the command-line front end. Exit codes: 0 success, 1 a requested check failed,
+// 2 bad usage, 3 bad input, 4 internal error (meso/core/error.hpp).
+#include "cli.hpp"
+
+#include "meso/core/error.hpp"
+
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+#include <tbb/global_control.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <iostream>
+#include <optional>
+
+#ifndef MESO_VERSION
+#define MESO_VERSION "0.0.0"
+#endif
+
+namespace meso::cli {
+
+void info(const Globals& g, const std::string& message) {
+  if (!g.quiet) spdlog::info("{}", message);
+}
+void warn(const Globals& g, const std::string& message) {
+  if (!g.quiet) spdlog::warn("{}", message);
+}
+
+void parse_size(const std::string& text, int& width, int& height) {
+  const auto x = text.find('x');
+  try {
+    size_t used = 0;
+    if (x == std::string::npos) {
+      width = height = std::stoi(text, &used);
+      if (used != text.size()) throw std::invalid_argument(text);
+    } else {
+      width = std::stoi(text.substr(0, x), &used);
+      if (used != x) throw std::invalid_argument(text);
+      height = std::stoi(text.substr(x + 1), &used);
+      if (used != text.size() - x - 1) throw std::invalid_argument(text);
+    }
+  } catch (const std::logic_error&) {
+    throw UsageError("size '" + text + "' is not N or WxH");
+  }
+  if (width < 1 || height < 1 || width > 32768 || height > 32768)
+    throw UsageError("size '" + text + "' is out of range (1 to 32768 per side)");
+}
+
+}  // namespace meso::cli
+
+int main(int argc, char** argv) {
+  using namespace meso;
+  cli::Globals globals;
+  cli::Context ctx{globals, {}};
+
+  CLI::App app{"meso: an offline asset-baking toolchain for displacement mapping.\n"
+               "Exit codes: 0 success, 1 a requested check failed, 2 bad usage, 3 bad input, 4 internal error."};
+  app.set_version_flag("--version", std::string("meso ") + MESO_VERSION);
+  app.require_subcommand(1);
+  // Global options may also follow the subcommand (meso bake ... --json); subcommands added
+  // below inherit this.
+  app.fallthrough();
+  app.add_option("--threads", globals.threads, "Worker threads (0 = all cores); outputs do not depend on it")
+      ->check(CLI::NonNegativeNumber);
+  app.add_flag("--quiet", globals.quiet, "No progress bar and no informational messages");
+  app.add_flag("--json", globals.json, "Print a machine-readable JSON report of what was done on stdout");
+  cli::add_meshreduce(app, ctx);
+  cli::add_uvpack(app, ctx);
+  cli::add_bake(app, ctx);
+  cli::add_frames(app, ctx);
+  cli::add_preview(app, ctx);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);  // prints help, version or the error
+    return code == 0 ? 0 : static_cast<int>(ExitCode::usage);
+  }
+
+  auto logger = spdlog::stderr_color_mt("meso");
+  logger->set_pattern("meso: %^%l%$: %v");
+  spdlog::set_default_logger(logger);
+
+  std::optional<tbb::global_control> threads;
+  if (globals.threads > 0) threads.emplace(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(globals.threads));
+  TerminalProgress progress(!globals.quiet && ::isatty(STDERR_FILENO));
+
+  nlohmann::json report = nlohmann::json::object();
+  int code = 0;
+  try {
+    if (!ctx.run) throw UsageError("no command given (see meso --help)");
+    code = ctx.run(report, progress);
+  } catch (const Error& e) {
+    std::fprintf(stderr, "meso: error: %s\n", e.what());
+    return static_cast<int>(e.code());
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "meso: error: out of memory\n");
+    return static_cast<int>(ExitCode::internal);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "meso: internal error: %s\n", e.what());
+    return static_cast<int>(ExitCode::internal);
+  }
+  if (globals.json) std::cout << report.dump(2) << std::endl;
+  return code;
+}

@@ -1,0 +1,46 @@
+// bake: per texel of the base mesh's UV layout, a ray along the interpolated base normal to
+// the high mesh (Embree 3); the hit gives the displacement and the high mesh's normal.
+// Course notes (displacement-authoring-course.md), "Heightfield Displacement Map and
+// Normal Map" and "Ray-caster".
+#pragma once
+
+#include "meso/core/image.hpp"
+#include "meso/core/mesh.hpp"
+#include "meso/core/progress.hpp"
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace meso {
+
+struct BakeOptions {
+  int width = 1024, height = 1024;
+  // Ray reach in object units in front of (along +normal) and behind the base surface.
+  // <= 0: 5 % of the high mesh's bounding-box diagonal.
+  float front = 0.0f, back = 0.0f;
+  int dilate = -1;  // texels to fill around charts; < 0 fills the whole image
+};
+
+struct BakeResult {
+  // Signed distance from the base surface to the high surface along the base normal, in
+  // object units, positive outward. One channel.
+  Image displacement;
+  // The high mesh's normal in the base's tangent space (tangent_frame.hpp), components in
+  // [-1, 1], three channels; (0, 0, 1) where the surfaces are parallel.
+  Image normal_ts;
+  size_t covered_texels = 0;  // texel centres inside some UV triangle
+  size_t hits = 0, misses = 0;
+  float front = 0, back = 0;  // the reach actually used
+  float min_displacement = 0, max_displacement = 0;  // over hits
+};
+
+// Requires UVs on `low` (InputError otherwise is the caller's job: this asserts) and
+// vertex normals on both meshes. Deterministic: the result does not depend on the number
+// of threads. Texels that miss are filled from hit neighbours by the dilation (and counted).
+BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& options, Progress& progress = null_progress());
+
+// Maps tangent-space normals in [-1,1] to [0,1] colours for PNG output (n * 0.5 + 0.5).
+Image encode_normal_map(const Image& normal_ts);
+
+}  // namespace meso

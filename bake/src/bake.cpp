@@ -1,0 +1,217 @@
+#include "meso/bake/bake.hpp"
+
+#include "meso/bake/dilate.hpp"
+#include "meso/bake/tangent_frame.hpp"
+#include "meso/bake/uv_raster.hpp"
+#include "meso/core/error.hpp"
+#include "meso/core/mesh_arrays.hpp"
+
+#include <Eigen/Dense>
+#include <embree3/rtcore.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+#include <limits>
+
+namespace meso {
+
+namespace {
+
+// RAII for an Embree scene over one mesh (positions copied once, with Embree's padding).
+class RayScene {
+ public:
+  explicit RayScene(const Mesh& mesh) : arrays_(flatten(mesh)) {
+    device_ = rtcNewDevice(nullptr);
+    if (!device_) throw InternalError("Embree: cannot create a device");
+    scene_ = rtcNewScene(device_);
+    // Robust mode: no cracks between triangles for rays through shared edges and vertices.
+    rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
+    rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
+    RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
+    rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, arrays_.positions.data(), 0,
+                               3 * sizeof(float), arrays_.vertex_count());
+    rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, arrays_.triangles.data(), 0,
+                               3 * sizeof(uint32_t), arrays_.triangle_count());
+    rtcCommitGeometry(geom);
+    rtcAttachGeometry(scene_, geom);
+    rtcReleaseGeometry(geom);
+    rtcCommitScene(scene_);
+    if (rtcGetDeviceError(device_) != RTC_ERROR_NONE) throw InternalError("Embree: scene build failed");
+  }
+  ~RayScene() {
+    rtcReleaseScene(scene_);
+    rtcReleaseDevice(device_);
+  }
+  RayScene(const RayScene&) = delete;
+  RayScene& operator=(const RayScene&) = delete;
+
+  struct Hit {
+    float t = std::numeric_limits<float>::infinity();
+    uint32_t prim = 0;
+    float u = 0, v = 0;
+    bool valid() const { return std::isfinite(t); }
+  };
+  Hit intersect(const Vec3f& org, const Vec3f& dir, float tfar) const {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    RTCRayHit rh{};
+    rh.ray.org_x = org[0];
+    rh.ray.org_y = org[1];
+    rh.ray.org_z = org[2];
+    rh.ray.dir_x = dir[0];
+    rh.ray.dir_y = dir[1];
+    rh.ray.dir_z = dir[2];
+    rh.ray.tnear = 0.0f;
+    rh.ray.tfar = tfar;
+    rh.ray.mask = 0xFFFFFFFFu;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(scene_, &ctx, &rh);
+    Hit h;
+    if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) {
+      h.t = rh.ray.tfar;
+      h.prim = rh.hit.primID;
+      h.u = rh.hit.u;
+      h.v = rh.hit.v;
+    }
+    return h;
+  }
+  const MeshArrays& arrays() const { return arrays_; }
+
+ private:
+  MeshArrays arrays_;
+  RTCDevice device_ = nullptr;
+  RTCScene scene_ = nullptr;
+};
+
+}  // namespace
+
+BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progress& progress) {
+  if (!has_uvs(low)) throw std::logic_error("bake: base mesh without UVs");
+  BakeResult r;
+  const float reach = 0.05f * bounding_box(high).diagonal();
+  r.front = o.front > 0 ? o.front : reach;
+  r.back = o.back > 0 ? o.back : reach;
+
+  // Ray start offset: far below the scale of any detail, far above float rounding at the
+  // mesh's coordinates.
+  const float eps = 1e-5f * std::max(bounding_box(high).diagonal(), bounding_box(low).diagonal());
+  const auto frames = compute_tangent_frames(low);
+  const auto samples = rasterize_uv(low, o.width, o.height);
+  RayScene scene(high);
+  // High vertex normals, indexed like the scene's vertex array.
+  std::vector<Vec3f> high_normals(high.n_vertices());
+  for (auto v : high.vertices()) high_normals[static_cast<size_t>(v.idx())] = high.normal(v);
+
+  r.displacement = Image(o.width, o.height, 1, 0.0f);
+  r.normal_ts = Image(o.width, o.height, 3, 0.0f);
+  std::vector<uint8_t> written(r.displacement.texel_count(), 0);
+  std::vector<uint8_t> covered(r.displacement.texel_count(), 0);
+
+  progress.begin("bake", static_cast<uint64_t>(o.height));
+  tbb::parallel_for(tbb::blocked_range<int>(0, o.height), [&](const tbb::blocked_range<int>& rows) {
+    for (int y = rows.begin(); y < rows.end(); ++y) {
+      for (int x = 0; x < o.width; ++x) {
+        const size_t i = static_cast<size_t>(y) * static_cast<size_t>(o.width) + static_cast<size_t>(x);
+        const TexelSample& s = samples[i];
+        if (s.face < 0) continue;
+        covered[i] = 1;
+        const auto hs = face_halfedges(low, FaceHandle(s.face));
+        // Interpolated position, normal and MikkTSpace frame (unnormalised, as the shader).
+        Eigen::Vector3d p = Eigen::Vector3d::Zero(), n = Eigen::Vector3d::Zero(), t = Eigen::Vector3d::Zero();
+        for (int k = 0; k < 3; ++k) {
+          const auto h = hs[static_cast<size_t>(k)];
+          const auto v = low.to_vertex_handle(h);
+          const double w = s.bary[static_cast<size_t>(k)];
+          const Vec3f& pv = low.point(v);
+          const Vec3f& nv = low.normal(v);
+          const Vec3f& tv = frames[static_cast<size_t>(h.idx())].tangent;
+          p += w * Eigen::Vector3d(pv[0], pv[1], pv[2]);
+          n += w * Eigen::Vector3d(nv[0], nv[1], nv[2]);
+          t += w * Eigen::Vector3d(tv[0], tv[1], tv[2]);
+        }
+        const double sign = frames[static_cast<size_t>(hs[0].idx())].sign;
+        const Eigen::Vector3d b = sign * n.cross(t);
+        if (!(n.norm() > 1e-12)) continue;  // opposite normals cancel: no direction to cast along
+        const Eigen::Vector3d dir = n.normalized();
+        const Vec3f d(static_cast<float>(dir.x()), static_cast<float>(dir.y()), static_cast<float>(dir.z()));
+        // Both ways from the base surface; the hit nearer to it wins (outward on a tie).
+        // Each ray starts `eps` behind the base point so that a high surface lying exactly
+        // on the base (high = low) is found by both, at distance 0.
+        auto origin = [&](double offset) {
+          const Eigen::Vector3d q = p + offset * dir;
+          return Vec3f(static_cast<float>(q.x()), static_cast<float>(q.y()), static_cast<float>(q.z()));
+        };
+        const auto out = scene.intersect(origin(-eps), d, r.front + eps);
+        const auto in = scene.intersect(origin(eps), -d, r.back + eps);
+        const float t_out = out.valid() ? out.t - eps : 0.0f, t_in = in.valid() ? in.t - eps : 0.0f;
+        const bool use_out = out.valid() && (!in.valid() || std::abs(t_out) <= std::abs(t_in));
+        const auto& hit = use_out ? out : in;
+        if (!hit.valid()) continue;
+        const float disp = use_out ? t_out : -t_in;
+        // High normal at the hit, Embree barycentrics: (1-u-v) v0 + u v1 + v v2.
+        const uint32_t* tri = &scene.arrays().triangles[3 * static_cast<size_t>(hit.prim)];
+        const Vec3f hn = high_normals[tri[0]] * (1.0f - hit.u - hit.v) + high_normals[tri[1]] * hit.u +
+                         high_normals[tri[2]] * hit.v;
+        Eigen::Matrix3d tbn;
+        tbn.col(0) = t;
+        tbn.col(1) = b;
+        tbn.col(2) = n;
+        Eigen::Vector3d m(0, 0, 1);
+        const Eigen::Vector3d hnd(hn[0], hn[1], hn[2]);
+        const double det = tbn.determinant();
+        if (std::abs(det) > 1e-12 && hnd.norm() > 0) {
+          m = tbn.inverse() * hnd;  // exact inverse of the decoder's matrix
+          if (m.norm() > 0) m.normalize();
+          else m = Eigen::Vector3d(0, 0, 1);
+        }
+        r.displacement.at(x, y) = disp;
+        for (int c = 0; c < 3; ++c) r.normal_ts.at(x, y, c) = static_cast<float>(m[c]);
+        written[i] = 1;
+      }
+      progress.advance(1);
+    }
+  });
+  progress.end();
+
+  bool first = true;
+  for (size_t i = 0; i < written.size(); ++i) {
+    r.covered_texels += covered[i];
+    if (!covered[i]) continue;
+    if (written[i]) {
+      ++r.hits;
+      const float d = r.displacement.pixels[i];
+      if (first) r.min_displacement = r.max_displacement = d;
+      r.min_displacement = std::min(r.min_displacement, d);
+      r.max_displacement = std::max(r.max_displacement, d);
+      first = false;
+    } else {
+      ++r.misses;
+    }
+  }
+  // Texels nobody wrote keep the flat answer until dilation reaches them.
+  for (size_t i = 0; i < written.size(); ++i) {
+    if (!written[i]) r.normal_ts.pixels[3 * i + 2] = 1.0f;
+  }
+  std::vector<uint8_t> written_n = written;
+  dilate(r.displacement, written, o.dilate);
+  dilate(r.normal_ts, written_n, o.dilate);
+
+  r.displacement.metadata = {{"quantity", std::string("displacement")},
+                             {"units", std::string("object")},
+                             {"convention", std::string("signed distance along the base normal, positive outward")},
+                             {"min", r.min_displacement},
+                             {"max", r.max_displacement}};
+  r.normal_ts.metadata = {{"quantity", std::string("normal")},
+                          {"space", std::string("tangent (MikkTSpace, +y = +v)")}};
+  return r;
+}
+
+Image encode_normal_map(const Image& normal_ts) {
+  Image out = normal_ts;
+  for (float& v : out.pixels) v = v * 0.5f + 0.5f;
+  out.metadata["encoding"] = std::string("n * 0.5 + 0.5");
+  return out;
+}
+
+}  // namespace meso

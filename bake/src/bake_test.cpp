@@ -1,0 +1,124 @@
+#include "meso/bake/bake.hpp"
+
+#include "meso/bake/dilate.hpp"
+#include "meso/examples/brick_wall.hpp"
+#include "test_support.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace meso {
+namespace {
+
+// The plane z = a x + b y + c over [-0.5, 1.5]^2, finely enough triangulated.
+Mesh make_plane(float a, float b, float c) {
+  Mesh m = test::make_grid(8, 8, 2.0f, 2.0f);
+  for (auto v : m.vertices()) {
+    Vec3f p = m.point(v) - Vec3f(0.5f, 0.5f, 0.0f);
+    p[2] = a * p[0] + b * p[1] + c;
+    m.set_point(v, p);
+  }
+  compute_angle_weighted_normals(m);
+  return m;
+}
+
+struct PlaneCase {
+  float a, b, c;
+};
+
+class BakePlane : public ::testing::TestWithParam<PlaneCase> {};
+
+// A flat unit base quad (UV = xy) over a plane: the displacement at the texel centre (u, v)
+// is exactly a u + b v + c and the tangent-space normal is normalize(-a, -b, 1).
+TEST_P(BakePlane, ReproducesTheAnalyticAnswer) {
+  const auto [a, b, c] = GetParam();
+  const Mesh low = test::make_grid(3, 2);
+  const Mesh high = make_plane(a, b, c);
+  BakeOptions o;
+  o.width = 32;
+  o.height = 16;
+  o.front = o.back = 0.5f;  // the default reach (5 % of the diagonal) is shorter than the tilt
+  const BakeResult r = bake(low, high, o);
+  EXPECT_EQ(r.covered_texels, 32u * 16u);
+  EXPECT_EQ(r.misses, 0u);
+  const Vec3f n = Vec3f(-a, -b, 1.0f).normalized();
+  for (int y = 0; y < o.height; ++y) {
+    for (int x = 0; x < o.width; ++x) {
+      const float u = texel_center_u(x, o.width), v = texel_center_v(y, o.height);
+      ASSERT_NEAR(r.displacement.at(x, y), a * u + b * v + c, 2e-6f) << x << "," << y;
+      for (int k = 0; k < 3; ++k) ASSERT_NEAR(r.normal_ts.at(x, y, k), n[k], 1e-5f) << x << "," << y;
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Planes, BakePlane,
+                         ::testing::Values(PlaneCase{0, 0, 0.05f}, PlaneCase{0, 0, -0.05f}, PlaneCase{0.1f, -0.05f, 0.01f},
+                                           PlaneCase{-0.2f, 0.1f, -0.02f}, PlaneCase{0, 0, 0}));
+
+TEST(Bake, IdenticalMeshesGiveZeroAndFlatNormals) {
+  const Mesh cube = test::make_seamed_cube();
+  BakeOptions o;
+  o.width = o.height = 64;
+  const BakeResult r = bake(cube, cube, o);
+  EXPECT_GT(r.covered_texels, 0u);
+  EXPECT_EQ(r.misses, 0u);
+  for (float d : r.displacement.pixels) ASSERT_NEAR(d, 0.0f, 1e-5f);
+  for (size_t i = 0; i < r.normal_ts.texel_count(); ++i) {
+    ASSERT_NEAR(r.normal_ts.pixels[3 * i + 2], 1.0f, 1e-5f) << i;
+  }
+}
+
+TEST(Bake, BrickWallMatchesItsHeightFunction) {
+  BrickWallOptions w;
+  w.bend_radius = 0;  // flat: the base is the z = 0 plane, so the answer is brick_wall_height
+  w.columns = 400;
+  w.rows = 200;
+  const Mesh high = make_brick_wall(w);
+  const Mesh low = make_brick_wall_base(w, 8, 4);
+  BakeOptions o;
+  o.width = 256;
+  o.height = 128;
+  const BakeResult r = bake(low, high, o);
+  EXPECT_EQ(r.misses, 0u);
+  std::vector<float> err;
+  for (int y = 0; y < o.height; ++y)
+    for (int x = 0; x < o.width; ++x) {
+      const float u = texel_center_u(x, o.width), v = texel_center_v(y, o.height);
+      err.push_back(std::abs(r.displacement.at(x, y) - brick_wall_height(w, u * w.width, v * w.height)));
+    }
+  std::sort(err.begin(), err.end());
+  // The high mesh interpolates the height linearly between grid vertices 0.005 apart; only
+  // texels near the bevels' kinks differ visibly.
+  EXPECT_LT(err[err.size() / 2], 0.01f * w.amplitude);
+  EXPECT_LT(err[err.size() * 95 / 100], 0.1f * w.amplitude);
+}
+
+TEST(Bake, MissesAreCountedAndFilled) {
+  const Mesh low = test::make_grid(2, 2);
+  Mesh high = make_plane(0, 0, 0.5f);  // out of reach
+  BakeOptions o;
+  o.width = o.height = 8;
+  o.front = o.back = 0.1f;
+  const BakeResult r = bake(low, high, o);
+  EXPECT_EQ(r.hits, 0u);
+  EXPECT_EQ(r.misses, 64u);
+  for (float d : r.displacement.pixels) EXPECT_EQ(d, 0.0f);
+}
+
+TEST(Dilate, CopiesTheNearestWrittenTexelUpToTheRadius) {
+  Image img(7, 1, 1, 0.0f);
+  std::vector<uint8_t> written(7, 0);
+  img.at(3, 0) = 5.0f;
+  written[3] = 1;
+  dilate(img, written, 2);
+  const float expect[7] = {0, 5, 5, 5, 5, 5, 0};
+  for (int x = 0; x < 7; ++x) EXPECT_EQ(img.at(x, 0), expect[x]) << x;
+  EXPECT_EQ(written[0], 0);
+  dilate(img, written, -1);
+  EXPECT_EQ(img.at(0, 0), 5.0f);
+}
+
+}  // namespace
+}  // namespace meso

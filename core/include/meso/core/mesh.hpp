@@ -1,0 +1,74 @@
+// The one mesh type of the meso pipeline.
+//
+// meso::Mesh is an OpenMesh TriMesh with these traits, chosen once:
+//  - positions and normals are float (OpenMesh::Vec3f), in object units, right-handed;
+//    the stored arrays are contiguous, so flat views (mesh_arrays.hpp) need no conversion;
+//  - texture coordinates live on halfedges (OpenMesh "halfedge texcoords": the UV of the
+//    corner at the halfedge's to-vertex inside the halfedge's face), so a UV seam is two
+//    different UVs at one welded vertex and is represented exactly;
+//    UVs follow the OpenGL convention: (0,0) is the bottom-left of the image, v grows up;
+//  - vertex normals are present when requested (request_vertex_normals());
+//  - every element has status bits, as the Decimater needs;
+//  - each face carries a group index into the mesh's list of group names (the input's
+//    mesh/node names), for match-by-name baking and for locking named parts.
+// Faces keep the input file's order, so reports name faces by their 0-based index.
+#pragma once
+
+#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace meso {
+
+struct MeshTraits : public OpenMesh::DefaultTraits {
+  using Point = OpenMesh::Vec3f;
+  using Normal = OpenMesh::Vec3f;
+  using TexCoord2D = OpenMesh::Vec2f;
+  VertexAttributes(OpenMesh::Attributes::Status);
+  HalfedgeAttributes(OpenMesh::Attributes::PrevHalfedge | OpenMesh::Attributes::Status);
+  EdgeAttributes(OpenMesh::Attributes::Status);
+  FaceAttributes(OpenMesh::Attributes::Status);
+};
+
+using Mesh = OpenMesh::TriMesh_ArrayKernelT<MeshTraits>;
+using Vec3f = OpenMesh::Vec3f;
+using Vec2f = OpenMesh::Vec2f;
+using VertexHandle = Mesh::VertexHandle;
+using FaceHandle = Mesh::FaceHandle;
+using HalfedgeHandle = Mesh::HalfedgeHandle;
+
+// Axis-aligned bounding box in object units.
+struct Box3 {
+  Vec3f lo{0, 0, 0};
+  Vec3f hi{0, 0, 0};
+  float diagonal() const { return (hi - lo).norm(); }
+  Vec3f center() const { return (lo + hi) * 0.5f; }
+};
+
+// True when the mesh carries texture coordinates (on its halfedges).
+bool has_uvs(const Mesh& mesh);
+
+// Face groups: each face has an index into group_names(mesh). A mesh read from a file
+// has one group per input mesh/node; a mesh built in code starts with one group "".
+void set_face_groups(Mesh& mesh, std::vector<std::string> names, const std::vector<int>& face_group);
+const std::vector<std::string>& group_names(const Mesh& mesh);
+int face_group(const Mesh& mesh, FaceHandle f);
+
+Box3 bounding_box(const Mesh& mesh);
+
+// The three halfedges of a face, in the face's winding order, the first one being the
+// halfedge that OpenMesh stores for the face. Corner i is the to-vertex of halfedge i.
+std::array<HalfedgeHandle, 3> face_halfedges(const Mesh& mesh, FaceHandle f);
+
+// Smooth vertex normals: the sum of incident face normals weighted by the corner angle
+// (Thürmer & Wüthrich), which does not depend on how a surface is triangulated.
+// Requests vertex normals if needed. Vertices without a valid face get (0,0,1).
+void compute_angle_weighted_normals(Mesh& mesh);
+
+// The UV-space signed double area of a face (positive for counter-clockwise UVs).
+float uv_double_area(const Mesh& mesh, FaceHandle f);
+
+}  // namespace meso

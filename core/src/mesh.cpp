@@ -1,0 +1,107 @@
+#include "meso/core/mesh.hpp"
+
+#include <cmath>
+
+namespace meso {
+namespace {
+
+struct GroupProps {
+  OpenMesh::FPropHandleT<int> face_group;
+  OpenMesh::MPropHandleT<std::vector<std::string>> names;
+};
+
+constexpr const char* kFaceGroup = "meso:face_group";
+constexpr const char* kGroupNames = "meso:group_names";
+
+const std::vector<std::string>& empty_names() {
+  static const std::vector<std::string> names{""};
+  return names;
+}
+
+}  // namespace
+
+bool has_uvs(const Mesh& mesh) { return mesh.has_halfedge_texcoords2D(); }
+
+void set_face_groups(Mesh& mesh, std::vector<std::string> names, const std::vector<int>& face_group) {
+  GroupProps p;
+  if (!mesh.get_property_handle(p.face_group, kFaceGroup)) mesh.add_property(p.face_group, kFaceGroup);
+  if (!mesh.get_property_handle(p.names, kGroupNames)) mesh.add_property(p.names, kGroupNames);
+  mesh.property(p.names) = std::move(names);
+  for (auto f : mesh.faces()) {
+    const size_t i = static_cast<size_t>(f.idx());
+    mesh.property(p.face_group, f) = i < face_group.size() ? face_group[i] : 0;
+  }
+}
+
+const std::vector<std::string>& group_names(const Mesh& mesh) {
+  OpenMesh::MPropHandleT<std::vector<std::string>> h;
+  if (!mesh.get_property_handle(h, kGroupNames)) return empty_names();
+  return mesh.property(h);
+}
+
+int face_group(const Mesh& mesh, FaceHandle f) {
+  OpenMesh::FPropHandleT<int> h;
+  if (!mesh.get_property_handle(h, kFaceGroup)) return 0;
+  return mesh.property(h, f);
+}
+
+Box3 bounding_box(const Mesh& mesh) {
+  Box3 b;
+  bool first = true;
+  for (auto v : mesh.vertices()) {
+    const Vec3f& p = mesh.point(v);
+    if (first) {
+      b.lo = b.hi = p;
+      first = false;
+    } else {
+      b.lo.minimize(p);
+      b.hi.maximize(p);
+    }
+  }
+  return b;
+}
+
+std::array<HalfedgeHandle, 3> face_halfedges(const Mesh& mesh, FaceHandle f) {
+  const HalfedgeHandle h0 = mesh.halfedge_handle(f);
+  const HalfedgeHandle h1 = mesh.next_halfedge_handle(h0);
+  const HalfedgeHandle h2 = mesh.next_halfedge_handle(h1);
+  return {h0, h1, h2};
+}
+
+void compute_angle_weighted_normals(Mesh& mesh) {
+  if (!mesh.has_vertex_normals()) mesh.request_vertex_normals();
+  std::vector<OpenMesh::Vec3d> sum(mesh.n_vertices(), OpenMesh::Vec3d(0, 0, 0));
+  for (auto f : mesh.faces()) {
+    const auto hs = face_halfedges(mesh, f);
+    OpenMesh::Vec3d p[3];
+    int vi[3];
+    for (int i = 0; i < 3; ++i) {
+      vi[i] = mesh.to_vertex_handle(hs[i]).idx();
+      p[i] = OpenMesh::vector_cast<OpenMesh::Vec3d>(mesh.point(mesh.to_vertex_handle(hs[i])));
+    }
+    OpenMesh::Vec3d n = OpenMesh::cross(p[1] - p[0], p[2] - p[0]);
+    const double len = n.norm();
+    if (!(len > 0)) continue;  // zero-area face: no direction to contribute
+    n /= len;
+    for (int i = 0; i < 3; ++i) {
+      OpenMesh::Vec3d a = p[(i + 1) % 3] - p[i], b = p[(i + 2) % 3] - p[i];
+      const double la = a.norm(), lb = b.norm();
+      if (!(la > 0 && lb > 0)) continue;
+      const double c = std::clamp(OpenMesh::dot(a, b) / (la * lb), -1.0, 1.0);
+      sum[static_cast<size_t>(vi[i])] += n * std::acos(c);
+    }
+  }
+  for (auto v : mesh.vertices()) {
+    OpenMesh::Vec3d n = sum[static_cast<size_t>(v.idx())];
+    const double len = n.norm();
+    mesh.set_normal(v, len > 0 ? OpenMesh::vector_cast<Vec3f>(n / len) : Vec3f(0, 0, 1));
+  }
+}
+
+float uv_double_area(const Mesh& mesh, FaceHandle f) {
+  const auto hs = face_halfedges(mesh, f);
+  const Vec2f a = mesh.texcoord2D(hs[0]), b = mesh.texcoord2D(hs[1]), c = mesh.texcoord2D(hs[2]);
+  return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+}
+
+}  // namespace meso

@@ -1,0 +1,97 @@
+#include "meso/formats/image_io.hpp"
+
+#include "meso/core/error.hpp"
+#include "test_support.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <ctime>
+
+namespace meso {
+namespace {
+
+Image ramp(int w, int h, int c) {
+  Image img(w, h, c);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int k = 0; k < c; ++k) img.at(x, y, k) = std::sin(0.37f * float(x) + 0.11f * float(y) + float(k)) * 0.5f + 0.5f;
+  return img;
+}
+
+TEST(ImageIo, ExrFloatRoundTripIsExactWithMetadata) {
+  test::TempDir dir;
+  Image img = ramp(37, 19, 1);
+  img.pixels[5] = -1234.5f;  // displacement may be negative and large
+  img.metadata = {{"units", std::string("object")}, {"scale", 0.25f}, {"levels", 3}};
+  write_image(img, dir / "d.exr", PixelFormat::float32);
+  const Image back = read_image(dir / "d.exr");
+  ASSERT_EQ(back.width, 37);
+  ASSERT_EQ(back.height, 19);
+  ASSERT_EQ(back.channels, 1);
+  EXPECT_EQ(back.pixels, img.pixels);
+  EXPECT_EQ(std::get<std::string>(back.metadata.at("units")), "object");
+  EXPECT_EQ(std::get<float>(back.metadata.at("scale")), 0.25f);
+  EXPECT_EQ(std::get<int>(back.metadata.at("levels")), 3);
+}
+
+TEST(ImageIo, Png16RoundTripWithinHalfAStep) {
+  test::TempDir dir;
+  const Image img = ramp(16, 9, 3);
+  write_image(img, dir / "n.png", PixelFormat::uint16);
+  const Image back = read_image(dir / "n.png");
+  ASSERT_EQ(back.channels, 3);
+  for (size_t i = 0; i < img.pixels.size(); ++i) EXPECT_NEAR(back.pixels[i], img.pixels[i], 0.5 / 65535.0 + 1e-7);
+}
+
+TEST(ImageIo, Png8RoundTripWithinHalfAStep) {
+  test::TempDir dir;
+  const Image img = ramp(8, 8, 4);
+  write_image(img, dir / "o.png", PixelFormat::uint8);
+  const Image back = read_image(dir / "o.png");
+  for (size_t i = 0; i < img.pixels.size(); ++i) EXPECT_NEAR(back.pixels[i], img.pixels[i], 0.5 / 255.0 + 1e-7);
+}
+
+TEST(ImageIo, RowsAreTopFirst) {
+  test::TempDir dir;
+  Image img(2, 2, 1, 0.0f);
+  img.at(0, 0) = 1.0f;  // top-left
+  write_image(img, dir / "t.exr", PixelFormat::float32);
+  const Image back = read_image(dir / "t.exr");
+  EXPECT_EQ(back.at(0, 0), 1.0f);
+  EXPECT_EQ(back.at(0, 1), 0.0f);
+}
+
+TEST(ImageIo, RefusesToWriteNaN) {
+  test::TempDir dir;
+  Image img(2, 2, 1, 0.0f);
+  img.pixels[3] = std::nanf("");
+  EXPECT_THROW(write_image(img, dir / "bad.exr", PixelFormat::float32), InternalError);
+}
+
+TEST(ImageIo, MissingAndGarbageFilesAreInputErrors) {
+  test::TempDir dir;
+  EXPECT_THROW(read_image(dir / "missing.exr"), InputError);
+  test::write_text(dir / "garbage.png", "not a png");
+  EXPECT_THROW(read_image(dir / "garbage.png"), InputError);
+}
+
+TEST(ImageIo, WritesAreDeterministic) {
+  test::TempDir dir;
+  Image img = ramp(64, 32, 1);
+  img.metadata = {{"units", std::string("object")}};
+  write_image(img, dir / "a.exr", PixelFormat::float32);
+  write_image(img, dir / "b.exr", PixelFormat::float32);
+  EXPECT_EQ(test::read_text(dir / "a.exr"), test::read_text(dir / "b.exr"));
+  // No clock in the header (two writes within one second would not show it).
+  char stamp[16];
+  const std::time_t now = std::time(nullptr);
+  std::strftime(stamp, sizeof stamp, "%Y:%m:", std::gmtime(&now));
+  EXPECT_EQ(test::read_text(dir / "a.exr").find(stamp), std::string::npos);
+  write_image(img, dir / "a.png", PixelFormat::uint16);
+  write_image(img, dir / "b.png", PixelFormat::uint16);
+  EXPECT_EQ(test::read_text(dir / "a.png"), test::read_text(dir / "b.png"));
+}
+
+}  // namespace
+}  // namespace meso

@@ -1,0 +1,373 @@
+#include "meso/formats/mesh_io.hpp"
+
+#include "meso/core/error.hpp"
+#include "meso/core/mesh_arrays.hpp"
+
+#include <OpenMesh/Core/IO/MeshIO.hh>
+#include <assimp/Importer.hpp>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <unordered_map>
+
+namespace meso {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct PosKey {
+  uint32_t b[3];
+  bool operator==(const PosKey& o) const { return b[0] == o.b[0] && b[1] == o.b[1] && b[2] == o.b[2]; }
+};
+struct PosKeyHash {
+  size_t operator()(const PosKey& k) const {
+    uint64_t h = 1469598103934665603ull;
+    for (uint32_t x : k.b) h = (h ^ x) * 1099511628211ull;
+    return static_cast<size_t>(h);
+  }
+};
+PosKey key_of(const Vec3f& p) {
+  PosKey k;
+  for (int i = 0; i < 3; ++i) {
+    const float v = p[i] + 0.0f;  // folds -0 into +0 so both weld
+    std::memcpy(&k.b[i], &v, 4);
+  }
+  return k;
+}
+
+// OpenMesh logs to stdout (which belongs to --json reports) and stderr (where meso prints
+// its own one-line messages); meso reports what matters itself, so mute it while it works.
+class SilenceOpenMesh {
+ public:
+  SilenceOpenMesh() : log_(omlog().is_enabled()), out_(omout().is_enabled()), err_(omerr().is_enabled()) {
+    omlog().disable();
+    omout().disable();
+    omerr().disable();
+  }
+  ~SilenceOpenMesh() {
+    if (log_) omlog().enable();
+    if (out_) omout().enable();
+    if (err_) omerr().enable();
+  }
+  SilenceOpenMesh(const SilenceOpenMesh&) = delete;
+  SilenceOpenMesh& operator=(const SilenceOpenMesh&) = delete;
+
+ private:
+  bool log_, out_, err_;
+};
+
+std::string lower_ext(const fs::path& p) {
+  std::string e = p.extension().string();
+  std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return e;
+}
+
+// One input mesh instanced by one node, with the node's accumulated transform.
+struct Instance {
+  const aiMesh* mesh;
+  aiMatrix4x4 transform;
+  std::string name;
+};
+
+void collect(const aiScene* scene, const aiNode* node, const aiMatrix4x4& parent, std::vector<Instance>& out) {
+  const aiMatrix4x4 m = parent * node->mTransformation;
+  for (unsigned i = 0; i < node->mNumMeshes; ++i) {
+    const aiMesh* mesh = scene->mMeshes[node->mMeshes[i]];
+    std::string name = mesh->mName.length ? mesh->mName.C_Str() : node->mName.C_Str();
+    out.push_back({mesh, m, name});
+  }
+  for (unsigned i = 0; i < node->mNumChildren; ++i) collect(scene, node->mChildren[i], m, out);
+}
+
+}  // namespace
+
+Mesh read_mesh(const fs::path& path, MeshReadReport* report) {
+  const std::string name = path.string();
+  if (!fs::exists(path)) throw InputError(name, "no such file");
+  if (fs::is_directory(path)) throw InputError(name, "is a folder, not a mesh file");
+  Assimp::Importer importer;
+  // Triangulate polygons in place; keep everything else as the file has it (no welding by
+  // assimp, which would also merge corners we want to keep, no reordering).
+  const aiScene* scene = importer.ReadFile(name, aiProcess_Triangulate | aiProcess_ValidateDataStructure);
+  if (!scene || !scene->mRootNode) {
+    std::string err = importer.GetErrorString();
+    err = err.substr(0, err.find('\n'));
+    throw InputError(name, "cannot read mesh: " + (err.empty() ? std::string("unknown format") : err));
+  }
+  std::vector<Instance> instances;
+  collect(scene, scene->mRootNode, aiMatrix4x4(), instances);
+
+  MeshReadReport rep;
+  const SilenceOpenMesh silence;  // add_face() complains about non-manifold faces; we count them
+  Mesh mesh;
+  bool any_uv = false, all_normals = true;
+  for (const auto& inst : instances) {
+    any_uv |= inst.mesh->HasTextureCoords(0);
+    all_normals &= inst.mesh->HasNormals();
+  }
+  if (any_uv) mesh.request_halfedge_texcoords2D();
+
+  std::unordered_map<PosKey, int, PosKeyHash> welded;
+  std::vector<OpenMesh::Vec3d> normal_sum;
+  std::vector<std::string> names;
+  std::vector<int> groups;
+
+  for (size_t g = 0; g < instances.size(); ++g) {
+    const Instance& inst = instances[g];
+    const aiMesh* am = inst.mesh;
+    names.push_back(inst.name);
+    aiMatrix3x3 normal_matrix(inst.transform);
+    normal_matrix.Inverse().Transpose();
+    std::vector<VertexHandle> local(am->mNumVertices);
+    std::vector<Vec3f> local_pos(am->mNumVertices);
+    rep.file_vertices += am->mNumVertices;
+    for (unsigned i = 0; i < am->mNumVertices; ++i) {
+      const aiVector3D p = inst.transform * am->mVertices[i];
+      const Vec3f pf(p.x, p.y, p.z);
+      if (!std::isfinite(pf[0]) || !std::isfinite(pf[1]) || !std::isfinite(pf[2]))
+        throw InputError(name, "vertex " + std::to_string(rep.file_vertices - am->mNumVertices + i) +
+                                   " has a NaN or infinite coordinate");
+      local_pos[i] = pf;
+      auto [it, inserted] = welded.try_emplace(key_of(pf), 0);
+      if (inserted) {
+        it->second = mesh.add_vertex(pf).idx();
+        normal_sum.emplace_back(0, 0, 0);
+      }
+      local[i] = VertexHandle(it->second);
+      if (am->HasNormals()) {
+        aiVector3D n = normal_matrix * am->mNormals[i];
+        if (std::isfinite(n.x) && std::isfinite(n.y) && std::isfinite(n.z))
+          normal_sum[static_cast<size_t>(it->second)] += OpenMesh::Vec3d(n.x, n.y, n.z).normalize_cond();
+      }
+    }
+    for (unsigned fi = 0; fi < am->mNumFaces; ++fi) {
+      const aiFace& af = am->mFaces[fi];
+      if (af.mNumIndices != 3) continue;  // points and lines carry no surface
+      unsigned idx[3] = {af.mIndices[0], af.mIndices[1], af.mIndices[2]};
+      std::vector<VertexHandle> vs = {local[idx[0]], local[idx[1]], local[idx[2]]};
+      FaceHandle f;
+      if (vs[0] != vs[1] && vs[1] != vs[2] && vs[0] != vs[2]) f = mesh.add_face(vs);
+      if (!f.is_valid()) {
+        // Non-manifold or repeating a vertex: keep the face, in order, on its own vertices.
+        for (int k = 0; k < 3; ++k) {
+          vs[static_cast<size_t>(k)] = mesh.add_vertex(local_pos[idx[k]]);
+          normal_sum.emplace_back(0, 0, 0);
+        }
+        f = mesh.add_face(vs);
+        if (!f.is_valid()) throw InternalError(name + ": could not add isolated face " + std::to_string(fi));
+        ++rep.isolated_faces;
+      }
+      groups.push_back(static_cast<int>(g));
+      if (any_uv) {
+        for (auto h : face_halfedges(mesh, f)) {
+          const auto v = mesh.to_vertex_handle(h);
+          int k = v == vs[0] ? 0 : v == vs[1] ? 1 : 2;
+          Vec2f uv(0, 0);
+          if (am->HasTextureCoords(0)) {
+            const aiVector3D t = am->mTextureCoords[0][idx[k]];
+            uv = Vec2f(t.x, t.y);
+            if (!std::isfinite(uv[0]) || !std::isfinite(uv[1]))
+              throw InputError(name, "face " + std::to_string(mesh.n_faces() - 1) + " has a NaN texture coordinate");
+          }
+          mesh.set_texcoord2D(h, uv);
+        }
+        if (!am->HasTextureCoords(0)) ++rep.faces_without_uv;
+      }
+    }
+  }
+  if (mesh.n_faces() == 0) throw InputError(name, "contains no triangles");
+  rep.welded_vertices = mesh.n_vertices();
+  rep.faces = mesh.n_faces();
+  rep.had_normals = all_normals;
+  set_face_groups(mesh, names, groups);
+
+  compute_angle_weighted_normals(mesh);
+  if (all_normals) {
+    // Keep the file's normals (averaged where vertices were welded) when they are usable.
+    for (auto v : mesh.vertices()) {
+      OpenMesh::Vec3d n = normal_sum[static_cast<size_t>(v.idx())];
+      if (n.norm() > 1e-12) mesh.set_normal(v, OpenMesh::vector_cast<Vec3f>(n.normalize()));
+    }
+  }
+  if (report) *report = rep;
+  return mesh;
+}
+
+bool is_writable_mesh_extension(const fs::path& path) {
+  const std::string e = lower_ext(path);
+  return e == ".obj" || e == ".ply" || e == ".gltf" || e == ".glb";
+}
+
+namespace {
+
+void write_with_openmesh(const Mesh& mesh, const fs::path& path, OpenMesh::IO::Options opt) {
+  const SilenceOpenMesh silence;
+  // 9 significant digits: every float survives the text round trip.
+  if (!OpenMesh::IO::write_mesh(mesh, path.string(), opt, 9))
+    throw InternalError(path.string() + ": cannot write mesh");
+}
+
+void write_ply(const Mesh& mesh, const fs::path& path) {
+  // PLY stores UVs per vertex: give each distinct corner attribute its own vertex.
+  const CornerSplit split = split_corners(mesh);
+  Mesh out;
+  const bool uv = has_uvs(mesh);
+  out.request_vertex_normals();
+  if (uv) out.request_vertex_texcoords2D();
+  for (size_t i = 0; i < split.corner.size(); ++i) {
+    const VertexHandle src(static_cast<int>(split.vertex[i]));
+    const auto v = out.add_vertex(mesh.point(src));
+    if (mesh.has_vertex_normals()) out.set_normal(v, mesh.normal(src));
+    if (uv) out.set_texcoord2D(v, mesh.texcoord2D(split.corner[i]));
+  }
+  size_t bad = 0;
+  for (size_t f = 0; f < split.triangles.size() / 3; ++f) {
+    std::vector<VertexHandle> vs;
+    for (int k = 0; k < 3; ++k) vs.push_back(VertexHandle(static_cast<int>(split.triangles[3 * f + static_cast<size_t>(k)])));
+    if (!out.add_face(vs).is_valid()) ++bad;
+  }
+  if (bad) throw InternalError(path.string() + ": " + std::to_string(bad) + " faces cannot be represented in PLY output");
+  OpenMesh::IO::Options opt = OpenMesh::IO::Options::Binary;
+  if (mesh.has_vertex_normals()) opt += OpenMesh::IO::Options::VertexNormal;
+  if (uv) opt += OpenMesh::IO::Options::VertexTexCoord;
+  write_with_openmesh(out, path, opt);
+}
+
+void base64(const std::vector<uint8_t>& in, std::string& out) {
+  static const char* t = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  out.reserve(out.size() + (in.size() + 2) / 3 * 4);
+  size_t i = 0;
+  for (; i + 2 < in.size(); i += 3) {
+    const uint32_t n = (uint32_t(in[i]) << 16) | (uint32_t(in[i + 1]) << 8) | in[i + 2];
+    out += t[(n >> 18) & 63]; out += t[(n >> 12) & 63]; out += t[(n >> 6) & 63]; out += t[n & 63];
+  }
+  if (i + 1 == in.size()) {
+    const uint32_t n = uint32_t(in[i]) << 16;
+    out += t[(n >> 18) & 63]; out += t[(n >> 12) & 63]; out += "==";
+  } else if (i + 2 == in.size()) {
+    const uint32_t n = (uint32_t(in[i]) << 16) | (uint32_t(in[i + 1]) << 8);
+    out += t[(n >> 18) & 63]; out += t[(n >> 12) & 63]; out += t[(n >> 6) & 63]; out += '=';
+  }
+}
+
+// glTF 2.0: one mesh, one primitive, vertices split at corner attribute changes.
+// glTF puts the UV origin at the top-left: v is flipped on the way out.
+void write_gltf(const Mesh& mesh, const fs::path& path, bool binary) {
+  const CornerSplit split = split_corners(mesh);
+  const bool uv = has_uvs(mesh);
+  const auto tan = tangent_property(mesh);
+  const size_t nv = split.corner.size();
+  std::vector<uint8_t> buf;
+  auto append = [&buf](const void* p, size_t n) {
+    const auto* b = static_cast<const uint8_t*>(p);
+    buf.insert(buf.end(), b, b + n);
+    while (buf.size() % 4) buf.push_back(0);
+  };
+  nlohmann::json views = nlohmann::json::array(), accessors = nlohmann::json::array(), attributes;
+  auto add_view = [&](const void* p, size_t n, int target) {
+    const size_t offset = buf.size();
+    append(p, n);
+    views.push_back({{"buffer", 0}, {"byteOffset", offset}, {"byteLength", n}, {"target", target}});
+    return views.size() - 1;
+  };
+  constexpr int kArray = 34962, kElements = 34963, kFloat = 5126, kUint = 5125;
+
+  std::vector<float> pos(nv * 3), nrm(nv * 3), tex(nv * 2), tng(nv * 4);
+  Vec3f lo(0, 0, 0), hi(0, 0, 0);
+  for (size_t i = 0; i < nv; ++i) {
+    const VertexHandle v(static_cast<int>(split.vertex[i]));
+    const Vec3f p = mesh.point(v);
+    if (i == 0) lo = hi = p;
+    lo.minimize(p);
+    hi.maximize(p);
+    const Vec3f n = mesh.has_vertex_normals() ? mesh.normal(v) : Vec3f(0, 0, 1);
+    for (int k = 0; k < 3; ++k) {
+      pos[3 * i + static_cast<size_t>(k)] = p[k];
+      nrm[3 * i + static_cast<size_t>(k)] = n[k];
+    }
+    if (uv) {
+      const Vec2f t = mesh.texcoord2D(split.corner[i]);
+      tex[2 * i] = t[0];
+      tex[2 * i + 1] = 1.0f - t[1];
+    }
+    if (tan.is_valid()) {
+      const auto t4 = mesh.property(tan, split.corner[i]);
+      for (int k = 0; k < 4; ++k) tng[4 * i + static_cast<size_t>(k)] = t4[k];
+    }
+  }
+  auto accessor = [&](size_t view, size_t count, const char* type, int ctype) {
+    accessors.push_back({{"bufferView", view}, {"componentType", ctype}, {"count", count}, {"type", type}});
+    return accessors.size() - 1;
+  };
+  const size_t ipos = accessor(add_view(pos.data(), pos.size() * 4, kArray), nv, "VEC3", kFloat);
+  accessors[ipos]["min"] = {lo[0], lo[1], lo[2]};
+  accessors[ipos]["max"] = {hi[0], hi[1], hi[2]};
+  attributes["POSITION"] = ipos;
+  attributes["NORMAL"] = accessor(add_view(nrm.data(), nrm.size() * 4, kArray), nv, "VEC3", kFloat);
+  if (uv) attributes["TEXCOORD_0"] = accessor(add_view(tex.data(), tex.size() * 4, kArray), nv, "VEC2", kFloat);
+  if (tan.is_valid()) attributes["TANGENT"] = accessor(add_view(tng.data(), tng.size() * 4, kArray), nv, "VEC4", kFloat);
+  const size_t iidx =
+      accessor(add_view(split.triangles.data(), split.triangles.size() * 4, kElements), split.triangles.size(), "SCALAR", kUint);
+
+  nlohmann::json doc;
+  doc["asset"] = {{"version", "2.0"}, {"generator", "meso"}};
+  doc["scene"] = 0;
+  doc["scenes"] = {{{"nodes", {0}}}};
+  doc["nodes"] = {{{"mesh", 0}}};
+  doc["meshes"] = {{{"primitives", {{{"attributes", attributes}, {"indices", iidx}, {"mode", 4}}}}}};
+  doc["accessors"] = accessors;
+  doc["bufferViews"] = views;
+  nlohmann::json buffer = {{"byteLength", buf.size()}};
+  std::ofstream out(path, std::ios::binary);
+  if (!out) throw InternalError(path.string() + ": cannot open for writing");
+  if (!binary) {
+    std::string uri = "data:application/octet-stream;base64,";
+    base64(buf, uri);
+    buffer["uri"] = uri;
+    doc["buffers"] = {buffer};
+    out << doc.dump(1) << '\n';
+  } else {
+    doc["buffers"] = {buffer};
+    std::string json = doc.dump();
+    while (json.size() % 4) json += ' ';
+    const uint32_t total = 12 + 8 + static_cast<uint32_t>(json.size()) + 8 + static_cast<uint32_t>(buf.size());
+    auto u32 = [&out](uint32_t x) { out.write(reinterpret_cast<const char*>(&x), 4); };
+    u32(0x46546C67);  // "glTF"
+    u32(2);
+    u32(total);
+    u32(static_cast<uint32_t>(json.size()));
+    u32(0x4E4F534A);  // "JSON"
+    out.write(json.data(), static_cast<std::streamsize>(json.size()));
+    u32(static_cast<uint32_t>(buf.size()));
+    u32(0x004E4942);  // "BIN\0"
+    out.write(reinterpret_cast<const char*>(buf.data()), static_cast<std::streamsize>(buf.size()));
+  }
+  if (!out) throw InternalError(path.string() + ": write failed");
+}
+
+}  // namespace
+
+void write_mesh(const Mesh& mesh, const fs::path& path) {
+  const std::string e = lower_ext(path);
+  if (e == ".obj") {
+    OpenMesh::IO::Options opt;
+    if (mesh.has_vertex_normals()) opt += OpenMesh::IO::Options::VertexNormal;
+    if (has_uvs(mesh)) opt += OpenMesh::IO::Options::FaceTexCoord;
+    write_with_openmesh(mesh, path, opt);
+  } else if (e == ".ply") {
+    write_ply(mesh, path);
+  } else if (e == ".gltf" || e == ".glb") {
+    write_gltf(mesh, path, e == ".glb");
+  } else {
+    throw UsageError(path.string() + ": unknown mesh extension (use .obj, .ply, .gltf or .glb)");
+  }
+}
+
+}  // namespace meso

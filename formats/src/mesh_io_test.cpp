@@ -1,0 +1,141 @@
+#include "meso/formats/mesh_io.hpp"
+
+#include "meso/core/error.hpp"
+#include "meso/core/mesh_arrays.hpp"
+#include "meso/formats/atomic_file.hpp"
+#include "test_support.hpp"
+
+#include <gtest/gtest.h>
+
+#include <map>
+
+namespace meso {
+namespace {
+
+// Per face, the corners' (position, uv) in winding order starting from the smallest
+// position, so two meshes compare equal whatever halfedge each face stores first.
+std::vector<std::vector<std::pair<Vec3f, Vec2f>>> corners(const Mesh& m) {
+  std::vector<std::vector<std::pair<Vec3f, Vec2f>>> out;
+  for (auto f : m.faces()) {
+    std::vector<std::pair<Vec3f, Vec2f>> c;
+    for (auto h : face_halfedges(m, f)) c.push_back({m.point(m.to_vertex_handle(h)), has_uvs(m) ? m.texcoord2D(h) : Vec2f(0, 0)});
+    auto less = [](const std::pair<Vec3f, Vec2f>& a, const std::pair<Vec3f, Vec2f>& b) {
+      return std::lexicographical_compare(a.first.data(), a.first.data() + 3, b.first.data(), b.first.data() + 3);
+    };
+    std::rotate(c.begin(), std::min_element(c.begin(), c.end(), less), c.end());
+    out.push_back(c);
+  }
+  return out;
+}
+
+class MeshRoundTrip : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(MeshRoundTrip, KeepsPositionsFaceOrderAndSeams) {
+  test::TempDir dir;
+  const Mesh cube = test::make_seamed_cube();
+  const auto path = dir / ("cube" + GetParam());
+  write_mesh(cube, path);
+  MeshReadReport report;
+  const Mesh back = read_mesh(path, &report);
+  EXPECT_EQ(back.n_vertices(), 8u) << "welded by position, seams kept on halfedges";
+  EXPECT_EQ(back.n_faces(), 12u);
+  EXPECT_EQ(report.isolated_faces, 0u);
+  ASSERT_TRUE(has_uvs(back));
+  const auto a = corners(cube), b = corners(back);
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t f = 0; f < a.size(); ++f) {
+    for (size_t k = 0; k < 3; ++k) {
+      EXPECT_EQ(a[f][k].first, b[f][k].first) << "face " << f;
+      EXPECT_NEAR(a[f][k].second[0], b[f][k].second[0], 1e-7) << "face " << f;
+      EXPECT_NEAR(a[f][k].second[1], b[f][k].second[1], 1e-7) << "face " << f;
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Formats, MeshRoundTrip, ::testing::Values(".obj", ".ply", ".gltf", ".glb"));
+
+TEST(MeshIo, GltfCarriesTangents) {
+  test::TempDir dir;
+  Mesh cube = test::make_seamed_cube();
+  const auto prop = add_tangent_property(cube);
+  for (auto h : cube.halfedges()) cube.property(prop, h) = OpenMesh::Vec4f(1, 0, 0, -1);
+  write_mesh(cube, dir / "cube.gltf");
+  const std::string text = test::read_text(dir / "cube.gltf");
+  EXPECT_NE(text.find("\"TANGENT\""), std::string::npos);
+  EXPECT_NO_THROW(read_mesh(dir / "cube.gltf"));
+}
+
+TEST(MeshIo, KeepsFaceOrderOfTheFile) {
+  test::TempDir dir;
+  // Faces deliberately listed in an order unrelated to their vertices.
+  test::write_text(dir / "order.obj",
+                   "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nv 2 1 0\n"
+                   "f 2 5 6\nf 1 2 3\nf 2 6 3\nf 1 3 4\n");
+  const Mesh m = read_mesh(dir / "order.obj");
+  ASSERT_EQ(m.n_faces(), 4u);
+  const float expected_min_x[4] = {1, 0, 1, 0};
+  for (auto f : m.faces()) {
+    float mx = 10;
+    for (auto v : m.fv_range(f)) mx = std::min(mx, m.point(v)[0]);
+    EXPECT_EQ(mx, expected_min_x[f.idx()]) << "face " << f.idx();
+  }
+  EXPECT_FALSE(has_uvs(m));
+}
+
+TEST(MeshIo, NonManifoldFacesAreKeptAndCounted) {
+  test::TempDir dir;
+  // Three triangles on one edge (1-2): the third cannot join the manifold mesh.
+  test::write_text(dir / "fan.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 1 0 1\nf 1 2 3\nf 2 4 3\nf 2 3 5\n");
+  MeshReadReport r;
+  const Mesh m = read_mesh(dir / "fan.obj", &r);
+  EXPECT_EQ(m.n_faces(), 3u);
+  EXPECT_EQ(r.isolated_faces, 1u);
+}
+
+TEST(MeshIo, MissingFileIsAnInputErrorNamingIt) {
+  try {
+    read_mesh("/nonexistent/meso/mesh.obj");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.code(), ExitCode::bad_input);
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/meso/mesh.obj"), std::string::npos);
+  }
+}
+
+TEST(MeshIo, GarbageIsAnInputError) {
+  test::TempDir dir;
+  test::write_text(dir / "garbage.ply", "this is not a mesh\n\x01\x02\x03");
+  EXPECT_THROW(read_mesh(dir / "garbage.ply"), InputError);
+  test::write_text(dir / "empty.obj", "# nothing\n");
+  EXPECT_THROW(read_mesh(dir / "empty.obj"), InputError);
+}
+
+TEST(MeshIo, NanCoordinateIsAnInputError) {
+  test::TempDir dir;
+  test::write_text(dir / "nan.obj", "v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n");
+  try {
+    read_mesh(dir / "nan.obj");
+    FAIL() << "a NaN vertex must be refused";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("NaN"), std::string::npos) << e.what();
+  }
+}
+
+TEST(OutputSet, LeavesNothingWithoutCommit) {
+  test::TempDir dir;
+  {
+    OutputSet out;
+    write_mesh(test::make_seamed_cube(), out.add(dir / "a.obj"));
+  }
+  EXPECT_TRUE(std::filesystem::is_empty(dir.path()));
+  {
+    OutputSet out;
+    write_mesh(test::make_seamed_cube(), out.add(dir / "b.obj"));
+    out.commit();
+  }
+  EXPECT_TRUE(std::filesystem::exists(dir / "b.obj"));
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path()), {}), 1);
+}
+
+}  // namespace
+}  // namespace meso

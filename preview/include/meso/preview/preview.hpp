@@ -1,0 +1,55 @@
+// preview: renders the base mesh with its baked maps by per-pixel displacement methods,
+// headless through EGL (Mesa llvmpipe in CI) or in a GLFW window; OpenGL 4.5 core.
+#pragma once
+
+#include "meso/core/image.hpp"
+#include "meso/core/mesh.hpp"
+
+#include <string>
+#include <vector>
+
+namespace meso {
+
+// What `meso bake` wrote: displacement (1 channel, object units along the base normal,
+// positive outward) and the tangent-space normal map (3 channels, encoded n * 0.5 + 0.5).
+struct PreviewMaps {
+  Image displacement;
+  Image normal_ts;
+};
+
+enum class PreviewShade {
+  lit,     // Lambert shading with the mesostructure normal, sRGB-encoded
+  uv,      // R, G = UV of the visible point found by the method (for measurements)
+  height,  // R = displacement at the visible point, object units
+};
+
+struct PreviewCamera {
+  // Degrees between the view direction and the mesh's mean normal (0 = straight on,
+  // up to 89.9), and around it (0 = from the side of +tangent of the mean frame).
+  float view_angle = 30.0f;
+  float azimuth = 0.0f;
+  float zoom = 1.0f;  // > 1 moves closer
+};
+
+struct PreviewOptions {
+  std::string method = "pom";
+  int width = 512, height = 512;
+  PreviewCamera camera;
+  int iterations = 32;  // the method's main iteration budget (POM: linear-search steps)
+  PreviewShade shade = PreviewShade::lit;
+};
+
+// Method names this build renders, in the order of the survey.
+const std::vector<std::string>& preview_methods();
+
+// Renders one frame off screen. Returns RGBA float pixels, top row first; alpha is 1 on
+// the mesh and 0 on the background. Throws UsageError for an unknown method and
+// InternalError when no OpenGL 4.5 context can be had.
+Image render_headless(const Mesh& base, const PreviewMaps& maps, const PreviewOptions& options);
+
+// Opens a window and renders interactively until it is closed: left drag orbits, wheel
+// zooms, 1-9 choose the method, +/- change the iteration budget. Throws InternalError
+// when no display is available.
+void run_window(const Mesh& base, const PreviewMaps& maps, const PreviewOptions& options);
+
+}  // namespace meso

@@ -1,0 +1,28 @@
+#version 450 core
+// Object space is world space in the previewer. Per-corner attributes come from
+// compute_tangent_frames() (bake/tangent_frame.hpp): the MikkTSpace tangent and sign, and
+// the lengths of dp/du and dp/dv (object units per UV unit) for stepping in UV space.
+layout(location = 0) in vec3 in_position;
+layout(location = 1) in vec3 in_normal;
+layout(location = 2) in vec2 in_uv;
+layout(location = 3) in vec4 in_tangent;
+layout(location = 4) in vec2 in_uv_scale;
+
+uniform mat4 u_view_projection;
+
+out vec3 v_position;
+out vec3 v_normal;
+out vec3 v_tangent;
+flat out float v_sign;
+out vec2 v_uv;
+out vec2 v_uv_scale;
+
+void main() {
+  v_position = in_position;
+  v_normal = in_normal;
+  v_tangent = in_tangent.xyz;
+  v_sign = in_tangent.w;
+  v_uv = in_uv;
+  v_uv_scale = in_uv_scale;
+  gl_Position = u_view_projection * vec4(in_position, 1.0);
+}

@@ -1,0 +1,243 @@
+#include "renderer.hpp"
+
+#include "meso/bake/tangent_frame.hpp"
+#include "meso/core/error.hpp"
+#include "meso/core/mesh_arrays.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace meso {
+
+namespace shaders {
+extern const char* const surface_vert;
+extern const char* const surface_frag;
+}  // namespace shaders
+
+const std::vector<std::string>& preview_methods() {
+  static const std::vector<std::string> names{"bump", "parallax", "pom"};
+  return names;
+}
+
+int method_index(const std::string& name) {
+  const auto& m = preview_methods();
+  const auto it = std::find(m.begin(), m.end(), name);
+  if (it == m.end()) throw UsageError("unknown preview method '" + name + "' (see --list-methods)");
+  return static_cast<int>(it - m.begin());
+}
+
+namespace {
+
+using Vec3d = OpenMesh::Vec3d;
+
+GLuint compile(GLenum type, const char* src) {
+  const GLuint s = glCreateShader(type);
+  glShaderSource(s, 1, &src, nullptr);
+  glCompileShader(s);
+  GLint ok = 0;
+  glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
+  if (!ok) {
+    char log[4096];
+    glGetShaderInfoLog(s, sizeof log, nullptr, log);
+    throw InternalError(std::string("preview shader does not compile: ") + log);
+  }
+  return s;
+}
+
+GLuint upload_texture(const Image& img, int channels) {
+  // Image rows are top row first; OpenGL's first row is v = 0 (bottom): flip on upload so
+  // texture(s, uv) uses meso's UV convention directly.
+  std::vector<float> rows(static_cast<size_t>(img.width) * static_cast<size_t>(img.height) * static_cast<size_t>(channels));
+  for (int y = 0; y < img.height; ++y) {
+    for (int x = 0; x < img.width; ++x) {
+      for (int c = 0; c < channels; ++c) {
+        rows[(static_cast<size_t>(img.height - 1 - y) * static_cast<size_t>(img.width) + static_cast<size_t>(x)) * static_cast<size_t>(channels) + static_cast<size_t>(c)] =
+            img.at(x, y, std::min(c, img.channels - 1));
+      }
+    }
+  }
+  GLuint tex = 0;
+  glGenTextures(1, &tex);
+  glBindTexture(GL_TEXTURE_2D, tex);
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  const GLenum internal = channels == 1 ? GL_R32F : GL_RGB32F;
+  const GLenum format = channels == 1 ? GL_RED : GL_RGB;
+  glTexImage2D(GL_TEXTURE_2D, 0, static_cast<GLint>(internal), img.width, img.height, 0, format, GL_FLOAT, rows.data());
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  return tex;
+}
+
+std::array<float, 16> multiply(const std::array<float, 16>& a, const std::array<float, 16>& b) {
+  std::array<float, 16> r{};
+  for (int c = 0; c < 4; ++c)
+    for (int rr = 0; rr < 4; ++rr) {
+      float s = 0;
+      for (int k = 0; k < 4; ++k) s += a[static_cast<size_t>(k * 4 + rr)] * b[static_cast<size_t>(c * 4 + k)];
+      r[static_cast<size_t>(c * 4 + rr)] = s;
+    }
+  return r;
+}
+
+}  // namespace
+
+CameraPose frame_camera(const Mesh& base, const PreviewCamera& cam, float aspect) {
+  // Mean normal: the area-weighted sum of face normals.
+  Vec3d n(0, 0, 0);
+  for (auto f : base.faces()) {
+    const auto hs = face_halfedges(base, f);
+    const Vec3d a = OpenMesh::vector_cast<Vec3d>(base.point(base.to_vertex_handle(hs[0])));
+    const Vec3d b = OpenMesh::vector_cast<Vec3d>(base.point(base.to_vertex_handle(hs[1])));
+    const Vec3d c = OpenMesh::vector_cast<Vec3d>(base.point(base.to_vertex_handle(hs[2])));
+    n += OpenMesh::cross(b - a, c - a);
+  }
+  if (!(n.norm() > 0)) n = Vec3d(0, 0, 1);
+  n.normalize();
+  const Vec3d ref = std::abs(n[1]) < 0.9 ? Vec3d(0, 1, 0) : Vec3d(1, 0, 0);
+  const Vec3d e1 = OpenMesh::cross(ref, n).normalize();
+  const Vec3d e2 = OpenMesh::cross(n, e1);
+  const Box3 box = bounding_box(base);
+  const Vec3d center = OpenMesh::vector_cast<Vec3d>(box.center());
+  const double radius = std::max(0.5 * static_cast<double>(box.diagonal()), 1e-30);
+  const double pi = 3.14159265358979323846;
+  const double a = std::clamp(static_cast<double>(cam.view_angle), 0.0, 89.9) * pi / 180.0;
+  const double az = static_cast<double>(cam.azimuth) * pi / 180.0;
+  const double fov = 40.0 * pi / 180.0;
+  const double dist = radius / std::sin(0.5 * fov) / std::max(static_cast<double>(cam.zoom), 1e-3);
+  const Vec3d side = e1 * std::cos(az) + e2 * std::sin(az);
+  const Vec3d to_eye = n * std::cos(a) + side * std::sin(a);
+  const Vec3d eye = center + to_eye * dist;
+  // Up: perpendicular to the orbit plane's side direction, so it is never parallel to the view.
+  const Vec3d up_hint = e2 * std::cos(az) - e1 * std::sin(az);
+  const Vec3d f = (center - eye).normalize();
+  const Vec3d r = OpenMesh::cross(f, up_hint).normalize();
+  const Vec3d u = OpenMesh::cross(r, f);
+  std::array<float, 16> view{};
+  for (int i = 0; i < 3; ++i) {
+    view[static_cast<size_t>(i * 4 + 0)] = static_cast<float>(r[i]);
+    view[static_cast<size_t>(i * 4 + 1)] = static_cast<float>(u[i]);
+    view[static_cast<size_t>(i * 4 + 2)] = static_cast<float>(-f[i]);
+  }
+  view[12] = static_cast<float>(-OpenMesh::dot(r, eye));
+  view[13] = static_cast<float>(-OpenMesh::dot(u, eye));
+  view[14] = static_cast<float>(OpenMesh::dot(f, eye));
+  view[15] = 1.0f;
+  const double near_plane = std::max(dist - 1.5 * radius, dist * 1e-3), far_plane = dist + 1.5 * radius;
+  const double ft = 1.0 / std::tan(0.5 * fov);
+  std::array<float, 16> proj{};
+  proj[0] = static_cast<float>(ft / aspect);
+  proj[5] = static_cast<float>(ft);
+  proj[10] = static_cast<float>((far_plane + near_plane) / (near_plane - far_plane));
+  proj[11] = -1.0f;
+  proj[14] = static_cast<float>(2.0 * far_plane * near_plane / (near_plane - far_plane));
+  CameraPose pose;
+  pose.view_projection = multiply(proj, view);
+  pose.eye = OpenMesh::vector_cast<Vec3f>(eye);
+  pose.light = OpenMesh::vector_cast<Vec3f>((n + e2 * 0.6 - e1 * 0.4).normalize());
+  return pose;
+}
+
+SurfaceRenderer::SurfaceRenderer(const Mesh& base, const PreviewMaps& maps) : base_(base) {
+  // Per-corner vertices: the same frames the baker encoded with.
+  Mesh m = base;
+  const auto frames = compute_tangent_frames(m);
+  store_tangents(m, frames);
+  const CornerSplit split = split_corners(m);
+  constexpr size_t kStride = 3 + 3 + 2 + 4 + 2;
+  std::vector<float> verts(split.corner.size() * kStride);
+  for (size_t i = 0; i < split.corner.size(); ++i) {
+    const auto h = split.corner[i];
+    const auto v = m.to_vertex_handle(h);
+    const auto& fr = frames[static_cast<size_t>(h.idx())];
+    const Vec3f p = m.point(v), nv = m.normal(v);
+    const Vec2f uv = m.texcoord2D(h);
+    float* o = &verts[i * kStride];
+    const float values[kStride] = {p[0], p[1], p[2], nv[0], nv[1], nv[2], uv[0], uv[1],
+                                   fr.tangent[0], fr.tangent[1], fr.tangent[2], fr.sign, fr.du_length, fr.dv_length};
+    std::copy(values, values + kStride, o);
+  }
+  index_count_ = static_cast<GLsizei>(split.triangles.size());
+
+  const GLuint vs = compile(GL_VERTEX_SHADER, shaders::surface_vert);
+  const GLuint fs = compile(GL_FRAGMENT_SHADER, shaders::surface_frag);
+  program_ = glCreateProgram();
+  glAttachShader(program_, vs);
+  glAttachShader(program_, fs);
+  glLinkProgram(program_);
+  glDeleteShader(vs);
+  glDeleteShader(fs);
+  GLint ok = 0;
+  glGetProgramiv(program_, GL_LINK_STATUS, &ok);
+  if (!ok) throw InternalError("preview shaders do not link");
+
+  glGenVertexArrays(1, &vao_);
+  glBindVertexArray(vao_);
+  glGenBuffers(1, &vbo_);
+  glBindBuffer(GL_ARRAY_BUFFER, vbo_);
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(verts.size() * sizeof(float)), verts.data(), GL_STATIC_DRAW);
+  const GLint sizes[5] = {3, 3, 2, 4, 2};
+  size_t offset = 0;
+  for (GLuint a = 0; a < 5; ++a) {
+    glEnableVertexAttribArray(a);
+    glVertexAttribPointer(a, sizes[a], GL_FLOAT, GL_FALSE, static_cast<GLsizei>(kStride * sizeof(float)),
+                          reinterpret_cast<const void*>(offset * sizeof(float)));
+    offset += static_cast<size_t>(sizes[a]);
+  }
+  glGenBuffers(1, &ibo_);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ibo_);
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(split.triangles.size() * sizeof(uint32_t)),
+               split.triangles.data(), GL_STATIC_DRAW);
+  glBindVertexArray(0);
+
+  height_tex_ = upload_texture(maps.displacement, 1);
+  normal_tex_ = upload_texture(maps.normal_ts, 3);
+  const auto& px = maps.displacement.pixels;
+  if (!px.empty()) {
+    const auto [lo, hi] = std::minmax_element(px.begin(), px.end());
+    h_min_ = std::min(*lo, 0.0f);
+    h_max_ = std::max(*hi, 0.0f);
+  }
+}
+
+SurfaceRenderer::~SurfaceRenderer() {
+  glDeleteTextures(1, &height_tex_);
+  glDeleteTextures(1, &normal_tex_);
+  glDeleteBuffers(1, &vbo_);
+  glDeleteBuffers(1, &ibo_);
+  glDeleteVertexArrays(1, &vao_);
+  glDeleteProgram(program_);
+}
+
+void SurfaceRenderer::draw(const PreviewOptions& o, int width, int height) {
+  const CameraPose pose = frame_camera(base_, o.camera, static_cast<float>(width) / static_cast<float>(height));
+  glViewport(0, 0, width, height);
+  glClearColor(0, 0, 0, 0);
+  glClearDepth(1.0);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  glEnable(GL_DEPTH_TEST);
+  glDisable(GL_CULL_FACE);
+  glUseProgram(program_);
+  glUniformMatrix4fv(glGetUniformLocation(program_, "u_view_projection"), 1, GL_FALSE, pose.view_projection.data());
+  glUniform3f(glGetUniformLocation(program_, "u_eye"), pose.eye[0], pose.eye[1], pose.eye[2]);
+  glUniform3f(glGetUniformLocation(program_, "u_light"), pose.light[0], pose.light[1], pose.light[2]);
+  glUniform1i(glGetUniformLocation(program_, "u_method"), method_index(o.method));
+  glUniform1i(glGetUniformLocation(program_, "u_iterations"), o.iterations);
+  glUniform1i(glGetUniformLocation(program_, "u_shade"), static_cast<int>(o.shade));
+  glUniform1f(glGetUniformLocation(program_, "u_h_min"), h_min_);
+  glUniform1f(glGetUniformLocation(program_, "u_h_max"), h_max_);
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_2D, height_tex_);
+  glUniform1i(glGetUniformLocation(program_, "u_height"), 0);
+  glActiveTexture(GL_TEXTURE1);
+  glBindTexture(GL_TEXTURE_2D, normal_tex_);
+  glUniform1i(glGetUniformLocation(program_, "u_normal"), 1);
+  glBindVertexArray(vao_);
+  glDrawElements(GL_TRIANGLES, index_count_, GL_UNSIGNED_INT, nullptr);
+  glBindVertexArray(0);
+}
+
+}  // namespace meso

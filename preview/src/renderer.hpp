@@ -1,0 +1,41 @@
+// The drawing code shared by the headless and the windowed previewer. Needs a current
+// OpenGL 4.5 core context (function pointers through libepoxy).
+#pragma once
+
+#include "meso/preview/preview.hpp"
+
+#include <epoxy/gl.h>
+
+#include <array>
+
+namespace meso {
+
+// Camera placement derived from the mesh (mean normal, bounding sphere) and PreviewCamera.
+struct CameraPose {
+  std::array<float, 16> view_projection;  // column-major
+  Vec3f eye;
+  Vec3f light;  // unit, toward the light, fixed relative to the mesh
+};
+CameraPose frame_camera(const Mesh& base, const PreviewCamera& camera, float aspect);
+
+class SurfaceRenderer {
+ public:
+  SurfaceRenderer(const Mesh& base, const PreviewMaps& maps);
+  ~SurfaceRenderer();
+  SurfaceRenderer(const SurfaceRenderer&) = delete;
+  SurfaceRenderer& operator=(const SurfaceRenderer&) = delete;
+
+  // Draws into the currently bound framebuffer, which must be width x height.
+  void draw(const PreviewOptions& options, int width, int height);
+
+ private:
+  const Mesh& base_;
+  GLuint program_ = 0, vao_ = 0, vbo_ = 0, ibo_ = 0, height_tex_ = 0, normal_tex_ = 0;
+  GLsizei index_count_ = 0;
+  float h_min_ = 0, h_max_ = 0;
+};
+
+// Index of a method name in preview_methods(); throws UsageError if unknown.
+int method_index(const std::string& name);
+
+}  // namespace meso

@@ -1,0 +1,185 @@
+// End-to-end tests of the `meso` command: exit codes, error lines, no partial output, and
+// the walking skeleton on a small generated asset whose answer is known.
+#include "meso/examples/brick_wall.hpp"
+#include "meso/formats/image_io.hpp"
+#include "meso/formats/mesh_io.hpp"
+#include "test_support.hpp"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace meso {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Result {
+  int code = -1;
+  std::string out, err;
+};
+
+Result run(const std::string& args) {
+  test::TempDir tmp;
+  const std::string cmd = std::string(MESO_EXE) + " " + args + " 2>" + (tmp / "stderr").string();
+  Result r;
+  FILE* p = ::popen(cmd.c_str(), "r");
+  if (!p) return r;
+  char buf[4096];
+  size_t n = 0;
+  while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
+  const int status = ::pclose(p);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.err = test::read_text(tmp / "stderr");
+  return r;
+}
+
+void example(const std::string& args) {
+  const std::string cmd = std::string(MESO_EXAMPLE_EXE) + " " + args;
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+}
+
+size_t lines(const std::string& s) { return static_cast<size_t>(std::count(s.begin(), s.end(), '\n')); }
+
+TEST(Cli, HelpVersionAndMethodList) {
+  const Result help = run("--help");
+  EXPECT_EQ(help.code, 0);
+  for (const char* sub : {"meshreduce", "uvpack", "bake", "frames", "preview"}) EXPECT_NE(help.out.find(sub), std::string::npos) << sub;
+  const Result version = run("--version");
+  EXPECT_EQ(version.code, 0);
+  EXPECT_NE(version.out.find("meso "), std::string::npos);
+  const Result methods = run("preview --list-methods");
+  EXPECT_EQ(methods.code, 0);
+  EXPECT_EQ(methods.out, "bump\nparallax\npom\n");
+}
+
+TEST(Cli, BadUsageExitsTwo) {
+  EXPECT_EQ(run("").code, 2);
+  EXPECT_EQ(run("no-such-command").code, 2);
+  EXPECT_EQ(run("meshreduce in.obj").code, 2) << "missing -o";
+  EXPECT_EQ(run("meshreduce in.obj -o out.obj --faces 10 --ratio 0.5").code, 2);
+  EXPECT_EQ(run("bake --low a.obj --high b.obj -o d --size 12x").code, 2);
+  EXPECT_EQ(run("preview --headless base.obj --maps d").code, 2) << "--headless without --png";
+}
+
+TEST(Cli, BadInputExitsThreeWithOneLineNamingTheFileAndNoOutput) {
+  test::TempDir dir;
+  test::write_text(dir / "garbage.obj", "\x7f\x45\x4c\x46 definitely not a mesh \x01\x02");
+  test::write_text(dir / "nan.obj", "v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n");
+  test::write_text(dir / "nouv.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n");
+  struct Case {
+    std::string args, file;
+  };
+  const std::string out = (dir / "out.obj").string();
+  const std::vector<Case> cases = {
+      {"meshreduce " + (dir / "missing.obj").string() + " -o " + out + " --faces 10", "missing.obj"},
+      {"meshreduce " + (dir / "garbage.obj").string() + " -o " + out + " --faces 10", "garbage.obj"},
+      {"meshreduce " + (dir / "nan.obj").string() + " -o " + out + " --faces 10", "nan.obj"},
+      {"bake --low " + (dir / "nouv.obj").string() + " --high " + (dir / "nouv.obj").string() + " -o " +
+           (dir / "maps").string() + " --size 16",
+       "nouv.obj"},
+      {"uvpack check " + (dir / "nouv.obj").string() + " --size 16 -o " + (dir / "o.png").string(), "nouv.obj"},
+  };
+  for (const auto& c : cases) {
+    const Result r = run(c.args);
+    EXPECT_EQ(r.code, 3) << c.args << "\n" << r.err;
+    EXPECT_EQ(lines(r.err), 1u) << r.err;
+    EXPECT_NE(r.err.find(c.file), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+    EXPECT_FALSE(fs::exists(dir / "o.png"));
+    EXPECT_TRUE(!fs::exists(dir / "maps") || fs::is_empty(dir / "maps")) << "no partial bake output";
+  }
+}
+
+class Skeleton : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new test::TempDir();
+    // A flat wall: the base is the z = 0 plane, so the bake's answer is brick_wall_height.
+    example("--bend-radius 0 --columns 300 --rows 150 -o " + (*dir_ / "high.obj").string());
+    example("--bend-radius 0 --base --columns 4 --rows 2 -o " + (*dir_ / "base.obj").string());
+  }
+  static void TearDownTestSuite() { delete dir_; }
+  static test::TempDir* dir_;
+};
+test::TempDir* Skeleton::dir_ = nullptr;
+
+TEST_F(Skeleton, BakeReproducesTheHeightFieldAndIsDeterministic) {
+  const auto& d = *dir_;
+  const Result r = run("bake --low " + (d / "base.obj").string() + " --high " + (d / "high.obj").string() + " -o " +
+                    (d / "maps1").string() + " --size 128x64 --threads 1 --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto report = nlohmann::json::parse(r.out);
+  EXPECT_EQ(report["misses"], 0);
+  EXPECT_EQ(report["covered_texels"], 128 * 64);
+  const Image disp = read_image(d / "maps1" / "displacement.exr");
+  ASSERT_EQ(disp.width, 128);
+  ASSERT_EQ(disp.height, 64);
+  BrickWallOptions w;
+  std::vector<float> err;
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 128; ++x)
+      err.push_back(std::abs(disp.at(x, y) - brick_wall_height(w, texel_center_u(x, 128) * w.width, texel_center_v(y, 64) * w.height)));
+  std::sort(err.begin(), err.end());
+  EXPECT_LT(err[err.size() / 2], 0.02f * w.amplitude);
+  EXPECT_LT(err[err.size() * 9 / 10], 0.2f * w.amplitude);  // bevel kinks between grid vertices
+  const Image normals = read_image(d / "maps1" / "normal_ts.png");
+  EXPECT_EQ(normals.channels, 3);
+
+  const Result r2 = run("bake --low " + (d / "base.obj").string() + " --high " + (d / "high.obj").string() + " -o " +
+                     (d / "maps2").string() + " --size 128x64 --threads 2 --quiet");
+  ASSERT_EQ(r2.code, 0) << r2.err;
+  EXPECT_EQ(r2.err, "") << "--quiet";
+  for (const char* f : {"displacement.exr", "normal_ts.png"})
+    EXPECT_EQ(test::read_text(d / "maps1" / f), test::read_text(d / "maps2" / f)) << f << " differs with the thread count";
+}
+
+TEST_F(Skeleton, WholePipeline) {
+  const auto& d = *dir_;
+  const Result reduce = run("meshreduce " + (d / "high.obj").string() + " -o " + (d / "reduced.obj").string() + " --faces 400 --json");
+  ASSERT_EQ(reduce.code, 0) << reduce.err;
+  const Mesh reduced = read_mesh(d / "reduced.obj");
+  EXPECT_LE(reduced.n_faces(), 400u);
+  EXPECT_TRUE(has_uvs(reduced));
+  EXPECT_EQ(nlohmann::json::parse(reduce.out)["output"]["faces"], reduced.n_faces());
+
+  const Result check = run("uvpack check " + (d / "reduced.obj").string() + " --size 256 -o " + (d / "overlay.png").string() +
+                        " --report " + (d / "uv.json").string());
+  ASSERT_EQ(check.code, 0) << check.err;
+  const auto uv = nlohmann::json::parse(test::read_text(d / "uv.json"));
+  EXPECT_EQ(uv["charts"], 1);
+  EXPECT_TRUE(uv["overlapping_faces"].empty());
+  EXPECT_EQ(read_image(d / "overlay.png").channels, 4);
+
+  const Result frames = run("frames " + (d / "reduced.obj").string() + " -o " + (d / "framed.glb").string());
+  ASSERT_EQ(frames.code, 0) << frames.err;
+  EXPECT_EQ(read_mesh(d / "framed.glb").n_faces(), reduced.n_faces());
+
+  const Result bake = run("bake --low " + (d / "reduced.obj").string() + " --high " + (d / "high.obj").string() + " -o " +
+                       (d / "maps").string() + " --size 128x64");
+  ASSERT_EQ(bake.code, 0) << bake.err;
+
+  const Result preview = run("preview " + (d / "reduced.obj").string() + " --maps " + (d / "maps").string() +
+                          " --method pom --headless --png " + (d / "pom.png").string() + " --size 96x64 --view-angle 45");
+  ASSERT_EQ(preview.code, 0) << preview.err;
+  const Image png = read_image(d / "pom.png");
+  EXPECT_EQ(png.width, 96);
+  EXPECT_EQ(png.height, 64);
+  size_t covered = 0;
+  for (size_t i = 0; i < png.texel_count(); ++i) covered += png.pixels[4 * i + 3] > 0.5f;
+  EXPECT_GT(covered, png.texel_count() / 10) << "the wall is in the frame";
+
+  const Result missing_maps = run("preview " + (d / "reduced.obj").string() + " --maps " + (d / "nowhere").string() +
+                               " --headless --png " + (d / "x.png").string());
+  EXPECT_EQ(missing_maps.code, 3);
+  EXPECT_NE(missing_maps.err.find("displacement.exr"), std::string::npos);
+  EXPECT_FALSE(fs::exists(d / "x.png"));
+}
+
+}  // namespace
+}  // namespace meso

@@ -1,0 +1,86 @@
+#include "test_support.hpp"
+
+#include <atomic>
+#include <fstream>
+#include <sstream>
+#include <unistd.h>
+
+namespace meso::test {
+
+namespace fs = std::filesystem;
+
+TempDir::TempDir() {
+  static std::atomic<int> counter{0};
+  path_ = fs::temp_directory_path() / ("meso-test-" + std::to_string(::getpid()) + "-" + std::to_string(counter++));
+  fs::remove_all(path_);
+  fs::create_directories(path_);
+}
+
+TempDir::~TempDir() {
+  std::error_code ec;
+  fs::remove_all(path_, ec);
+}
+
+void write_text(const fs::path& path, const std::string& text) {
+  std::ofstream f(path, std::ios::binary);
+  f << text;
+}
+
+std::string read_text(const fs::path& path) {
+  std::ifstream f(path, std::ios::binary);
+  std::stringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+
+Mesh make_seamed_cube() {
+  Mesh m;
+  m.request_halfedge_texcoords2D();
+  VertexHandle v[8];
+  for (int i = 0; i < 8; ++i) v[i] = m.add_vertex(Vec3f(float(i & 1), float((i >> 1) & 1), float((i >> 2) & 1)));
+  // Each side: 4 corners counter-clockwise seen from outside.
+  const int sides[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (int s = 0; s < 6; ++s) {
+    const float u0 = float(s % 3) / 3.0f, v0 = float(s / 3) / 2.0f;
+    const float du = 1.0f / 3.0f * 0.8f, dv = 0.5f * 0.8f;
+    const Vec2f uv[4] = {{u0 + 0.02f, v0 + 0.02f}, {u0 + 0.02f + du, v0 + 0.02f}, {u0 + 0.02f + du, v0 + 0.02f + dv},
+                         {u0 + 0.02f, v0 + 0.02f + dv}};
+    const int tris[2][3] = {{0, 1, 2}, {0, 2, 3}};
+    for (const auto& t : tris) {
+      const auto f = m.add_face(v[sides[s][t[0]]], v[sides[s][t[1]]], v[sides[s][t[2]]]);
+      for (auto h : face_halfedges(m, f)) {
+        const auto to = m.to_vertex_handle(h);
+        for (int k = 0; k < 3; ++k)
+          if (to == v[sides[s][t[k]]]) m.set_texcoord2D(h, uv[t[k]]);
+      }
+    }
+  }
+  set_face_groups(m, {"cube"}, {});
+  compute_angle_weighted_normals(m);
+  return m;
+}
+
+Mesh make_grid(int columns, int rows, float sx, float sy) {
+  Mesh m;
+  m.request_halfedge_texcoords2D();
+  auto id = [&](int i, int j) { return VertexHandle(j * (columns + 1) + i); };
+  for (int j = 0; j <= rows; ++j)
+    for (int i = 0; i <= columns; ++i) m.add_vertex(Vec3f(sx * float(i) / float(columns), sy * float(j) / float(rows), 0));
+  for (int j = 0; j < rows; ++j) {
+    for (int i = 0; i < columns; ++i) {
+      const VertexHandle q[4] = {id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)};
+      for (const auto& t : {std::array<int, 3>{0, 1, 2}, std::array<int, 3>{0, 2, 3}}) {
+        const auto f = m.add_face(q[t[0]], q[t[1]], q[t[2]]);
+        for (auto h : face_halfedges(m, f)) {
+          const Vec3f p = m.point(m.to_vertex_handle(h));
+          m.set_texcoord2D(h, Vec2f(p[0] / sx, p[1] / sy));
+        }
+      }
+    }
+  }
+  set_face_groups(m, {"grid"}, {});
+  compute_angle_weighted_normals(m);
+  return m;
+}
+
+}  // namespace meso::test

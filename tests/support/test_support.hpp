@@ -1,0 +1,37 @@
+// Helpers shared by meso's tests.
+#pragma once
+
+#include "meso/core/mesh.hpp"
+
+#include <filesystem>
+#include <string>
+
+namespace meso::test {
+
+// A fresh empty folder under the system temp folder, removed when the object dies.
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+  std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+// Writes `text` to `path`.
+void write_text(const std::filesystem::path& path, const std::string& text);
+std::string read_text(const std::filesystem::path& path);
+
+// A unit cube (8 welded vertices, 12 faces) whose six sides are separate UV charts laid
+// out in a 3x2 grid: every edge of the cube is a UV seam.
+Mesh make_seamed_cube();
+
+// A width x height grid in the z = 0 plane from (0,0) to (sx, sy), UV = (x / sx, y / sy),
+// with smooth normals (0,0,1).
+Mesh make_grid(int columns, int rows, float sx = 1.0f, float sy = 1.0f);
+
+}  // namespace meso::test
