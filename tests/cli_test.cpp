@@ -49,7 +49,7 @@ size_t lines(const std::string& s) { return static_cast<size_t>(std::count(s.beg
 TEST(Cli, HelpVersionAndMethodList) {
   const Result help = run("--help");
   EXPECT_EQ(help.code, 0);
-  for (const char* sub : {"meshreduce", "uvpack", "bake", "frames", "preview"}) EXPECT_NE(help.out.find(sub), std::string::npos) << sub;
+  for (const char* sub : {"meshreduce", "uvpack", "bake", "frames", "streams", "preview"}) EXPECT_NE(help.out.find(sub), std::string::npos) << sub;
   const Result version = run("--version");
   EXPECT_EQ(version.code, 0);
   EXPECT_NE(version.out.find("meso "), std::string::npos);
@@ -65,6 +65,7 @@ TEST(Cli, BadUsageExitsTwo) {
   EXPECT_EQ(run("meshreduce in.obj -o out.obj --faces 10 --ratio 0.5").code, 2);
   EXPECT_EQ(run("bake --low a.obj --high b.obj -o d --size 12x").code, 2);
   EXPECT_EQ(run("preview --headless base.obj --maps d").code, 2) << "--headless without --png";
+  EXPECT_EQ(run("streams pyramid h.exr -o p.exr --wrap --clamp").code, 2);
 }
 
 TEST(Cli, BadInputExitsThreeWithOneLineNamingTheFileAndNoOutput) {

@@ -34,6 +34,7 @@ void add_meshreduce(CLI::App& app, Context& ctx);
 void add_uvpack(CLI::App& app, Context& ctx);
 void add_bake(CLI::App& app, Context& ctx);
 void add_frames(CLI::App& app, Context& ctx);
+void add_streams(CLI::App& app, Context& ctx);
 void add_preview(CLI::App& app, Context& ctx);
 
 // Informational lines on stderr ("meso: ..."), silenced by --quiet.

@@ -68,6 +68,7 @@ int main(int argc, char** argv) {
   cli::add_uvpack(app, ctx);
   cli::add_bake(app, ctx);
   cli::add_frames(app, ctx);
+  cli::add_streams(app, ctx);
   cli::add_preview(app, ctx);
 
   try {

@@ -64,45 +64,106 @@ Image read_image(const fs::path& path) {
   return img;
 }
 
-void write_image(const Image& image, const fs::path& path, PixelFormat format) {
-  const std::string name = path.string();
+namespace {
+
+OIIO::TypeDesc type_of(PixelFormat format) {
+  switch (format) {
+    case PixelFormat::half: return OIIO::TypeDesc::HALF;
+    case PixelFormat::uint8: return OIIO::TypeDesc::UINT8;
+    case PixelFormat::uint16: return OIIO::TypeDesc::UINT16;
+    case PixelFormat::float32: break;
+  }
+  return OIIO::TypeDesc::FLOAT;
+}
+
+void check_writable(const Image& image, const std::string& name) {
   if (image.empty()) throw InternalError(name + ": refusing to write an empty image");
   for (float v : image.pixels) {
     if (std::isnan(v)) throw InternalError(name + ": image has NaN samples (a bug in meso)");
   }
-  auto out = OIIO::ImageOutput::create(name);
-  if (!out) throw InternalError(name + ": no image writer for this extension");
-  OIIO::TypeDesc type = OIIO::TypeDesc::FLOAT;
-  switch (format) {
-    case PixelFormat::float32: type = OIIO::TypeDesc::FLOAT; break;
-    case PixelFormat::half: type = OIIO::TypeDesc::HALF; break;
-    case PixelFormat::uint8: type = OIIO::TypeDesc::UINT8; break;
-    case PixelFormat::uint16: type = OIIO::TypeDesc::UINT16; break;
-  }
-  OIIO::ImageSpec spec(image.width, image.height, image.channels, type);
+}
+
+OIIO::ImageSpec spec_of(const Image& image, PixelFormat format, const ImageMetadata& metadata) {
+  OIIO::ImageSpec spec(image.width, image.height, image.channels, type_of(format));
   spec.attribute("oiio:UnassociatedAlpha", 1);
   if (format == PixelFormat::float32 || format == PixelFormat::half) spec.attribute("compression", "zip");
   // No timestamps in headers: outputs must be byte-identical across runs. OIIO's EXR writer
   // stamps the current time into capDate unless DateTime is given; an empty one writes none.
   spec.attribute("DateTime", "");
-  for (const auto& [k, v] : image.metadata) {
+  for (const auto& [k, v] : metadata) {
     const std::string key = std::string(kPrefix) + k;
     if (const int* i = std::get_if<int>(&v)) spec.attribute(key, *i);
     else if (const float* f = std::get_if<float>(&v)) spec.attribute(key, *f);
     else spec.attribute(key, std::get<std::string>(v));
   }
-  if (!out->open(name, spec)) throw InternalError(name + ": cannot open for writing: " + out->geterror());
-  bool ok = false;
+  return spec;
+}
+
+bool write_pixels(OIIO::ImageOutput& out, const Image& image, PixelFormat format) {
   if (format == PixelFormat::uint8) {
     auto q = quantize<uint8_t>(image.pixels, 255.0f);
-    ok = out->write_image(OIIO::TypeDesc::UINT8, q.data());
-  } else if (format == PixelFormat::uint16) {
-    auto q = quantize<uint16_t>(image.pixels, 65535.0f);
-    ok = out->write_image(OIIO::TypeDesc::UINT16, q.data());
-  } else {
-    ok = out->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data());
+    return out.write_image(OIIO::TypeDesc::UINT8, q.data());
   }
-  if (!ok || !out->close()) throw InternalError(name + ": cannot write image: " + out->geterror());
+  if (format == PixelFormat::uint16) {
+    auto q = quantize<uint16_t>(image.pixels, 65535.0f);
+    return out.write_image(OIIO::TypeDesc::UINT16, q.data());
+  }
+  return out.write_image(OIIO::TypeDesc::FLOAT, image.pixels.data());
+}
+
+}  // namespace
+
+void write_image(const Image& image, const fs::path& path, PixelFormat format) {
+  const std::string name = path.string();
+  check_writable(image, name);
+  auto out = OIIO::ImageOutput::create(name);
+  if (!out) throw InternalError(name + ": no image writer for this extension");
+  const OIIO::ImageSpec spec = spec_of(image, format, image.metadata);
+  if (!out->open(name, spec)) throw InternalError(name + ": cannot open for writing: " + out->geterror());
+  if (!write_pixels(*out, image, format) || !out->close()) throw InternalError(name + ": cannot write image: " + out->geterror());
+}
+
+void write_image_levels(const std::vector<Image>& levels, const fs::path& path, PixelFormat format) {
+  const std::string name = path.string();
+  if (levels.empty()) throw InternalError(name + ": no levels to write");
+  for (size_t k = 0; k < levels.size(); ++k) {
+    check_writable(levels[k], name);
+    if (levels[k].channels != levels[0].channels) throw InternalError(name + ": levels differ in channel count");
+    if (k > 0 && (levels[k].width != std::max(1, levels[k - 1].width / 2) || levels[k].height != std::max(1, levels[k - 1].height / 2)))
+      throw InternalError(name + ": level sizes do not halve (rounding down) from one level to the next");
+  }
+  if (format != PixelFormat::float32 && format != PixelFormat::half) throw InternalError(name + ": MIP levels are written as EXR only");
+  auto out = OIIO::ImageOutput::create(name);
+  if (!out || !out->supports("mipmap")) throw InternalError(name + ": this format cannot hold MIP levels (use .exr)");
+  for (size_t k = 0; k < levels.size(); ++k) {
+    OIIO::ImageSpec spec = spec_of(levels[k], format, k == 0 ? levels[0].metadata : ImageMetadata{});
+    // A tiled, MIP-mapped EXR (OpenEXR's MIPMAP_LEVELS, rounding down).
+    spec.tile_width = spec.tile_height = 64;
+    spec.attribute("openexr:levelmode", 1);
+    spec.attribute("textureformat", "Plain Texture");
+    const auto mode = k == 0 ? OIIO::ImageOutput::Create : OIIO::ImageOutput::AppendMIPLevel;
+    if (!out->open(name, spec, mode)) throw InternalError(name + ": cannot open for writing: " + out->geterror());
+    if (!write_pixels(*out, levels[k], format)) throw InternalError(name + ": cannot write level " + std::to_string(k) + ": " + out->geterror());
+  }
+  if (!out->close()) throw InternalError(name + ": cannot write image: " + out->geterror());
+}
+
+std::vector<Image> read_image_levels(const fs::path& path) {
+  std::vector<Image> levels{read_image(path)};
+  const std::string name = path.string();
+  auto in = OIIO::ImageInput::open(name);
+  if (!in) throw InputError(name, "cannot read image");
+  for (int k = 1; in->seek_subimage(0, k); ++k) {
+    const OIIO::ImageSpec& spec = in->spec();
+    Image img(spec.width, spec.height, spec.nchannels);
+    if (!in->read_image(0, k, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, img.pixels.data()))
+      throw InputError(name, "cannot read MIP level " + std::to_string(k));
+    for (float v : img.pixels) {
+      if (!std::isfinite(v)) throw InputError(name, "MIP level " + std::to_string(k) + " contains NaN or infinite samples");
+    }
+    levels.push_back(std::move(img));
+  }
+  return levels;
 }
 
 }  // namespace meso

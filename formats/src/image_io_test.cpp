@@ -95,3 +95,39 @@ TEST(ImageIo, WritesAreDeterministic) {
 
 }  // namespace
 }  // namespace meso
+
+namespace meso {
+namespace {
+
+TEST(ImageIo, MipLevelsRoundTripInOneExr) {
+  test::TempDir dir;
+  std::vector<Image> levels;
+  for (int w = 13, h = 6; ; w = std::max(1, w / 2), h = std::max(1, h / 2)) {
+    levels.push_back(ramp(w, h, 2));
+    if (w == 1 && h == 1) break;
+  }
+  levels[0].metadata = {{"border", std::string("wrap")}};
+  write_image_levels(levels, dir / "p.exr", PixelFormat::float32);
+  const auto back = read_image_levels(dir / "p.exr");
+  ASSERT_EQ(back.size(), levels.size());
+  for (size_t k = 0; k < levels.size(); ++k) {
+    EXPECT_EQ(back[k].width, levels[k].width);
+    EXPECT_EQ(back[k].height, levels[k].height);
+    EXPECT_EQ(back[k].pixels, levels[k].pixels) << "level " << k;
+  }
+  EXPECT_EQ(std::get<std::string>(back[0].metadata.at("border")), "wrap");
+  // Sizes that do not halve are refused.
+  levels[1] = ramp(5, 3, 2);
+  EXPECT_THROW(write_image_levels(levels, dir / "q.exr", PixelFormat::float32), InternalError);
+}
+
+TEST(ImageIo, HalfExrKeepsHalfPrecision) {
+  test::TempDir dir;
+  const Image img = ramp(9, 4, 1);
+  write_image(img, dir / "h.exr", PixelFormat::half);
+  const Image back = read_image(dir / "h.exr");
+  for (size_t i = 0; i < img.pixels.size(); ++i) EXPECT_NEAR(back.pixels[i], img.pixels[i], 1.0 / 2048);
+}
+
+}  // namespace
+}  // namespace meso

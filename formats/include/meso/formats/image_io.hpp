@@ -6,6 +6,7 @@
 #include "meso/core/image.hpp"
 
 #include <filesystem>
+#include <vector>
 
 namespace meso {
 
@@ -19,5 +20,13 @@ Image read_image(const std::filesystem::path& path);
 // formats clamp to [0,1] and round to nearest. NaN samples are a bug: throws InternalError
 // rather than writing one. Not atomic by itself: pass a path from OutputSet::add().
 void write_image(const Image& image, const std::filesystem::path& path, PixelFormat format);
+
+// Writes a MIP chain as one tiled, MIP-mapped EXR (OpenEXR MIPMAP_LEVELS, sizes rounding
+// down, as OpenGL's). Level k+1 must be max(1, floor(level k / 2)) per side. The metadata of
+// levels[0] goes into the header. Channels are named by OIIO's defaults (R, G, B, A, ...).
+void write_image_levels(const std::vector<Image>& levels, const std::filesystem::path& path, PixelFormat format);
+
+// Reads every MIP level of an image file (one level for files without MIP maps).
+std::vector<Image> read_image_levels(const std::filesystem::path& path);
 
 }  // namespace meso

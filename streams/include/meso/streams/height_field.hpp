@@ -1,0 +1,37 @@
+// The height field that every stream is computed from (survey section 4, "normalized
+// tangent space"): heights normalised to [0, 1], with the map back to object units.
+#pragma once
+
+#include "meso/core/image.hpp"
+
+#include <string>
+
+namespace meso {
+
+// How a lookup outside [0,1]^2 behaves: clamp to the edge texel (GL_CLAMP_TO_EDGE) or
+// repeat (a tiling map, GL_REPEAT). Streams and shaders must agree on it.
+enum class Border { clamp, wrap };
+
+const char* border_name(Border b);
+
+struct HeightField {
+  Image height;        // 1 channel, normalised heights in [0, 1]; 1 = the outermost (highest) point
+  float scale = 1.0f;  // object units = bias + scale * normalised height
+  float bias = 0.0f;
+  Border border = Border::clamp;
+
+  int width() const { return height.width; }
+  int texel_count() const { return height.width * height.height; }
+  // The texel at integer coordinates after applying the border rule.
+  float texel(int x, int y) const;
+  // The bilinearly filtered surface at pixel coordinates (px, py) (texel centres at +0.5),
+  // as GL_LINEAR samples it.
+  float bilinear(double px, double py) const;
+};
+
+// Takes channel 0 of `image` (a baked displacement.exr in object units, or any grey height
+// map) and normalises it: bias = its minimum, scale = max - min (0 for a flat map, whose
+// normalised heights are all 0).
+HeightField make_height_field(const Image& image, Border border);
+
+}  // namespace meso

@@ -1,0 +1,27 @@
+// Min-max height pyramid (survey section 4.3.3, pyramidal displacement mapping; the
+// depth-interval-grid paper's interval bounds): per texel of every mip level, the exact
+// minimum and maximum of the bilinearly filtered height surface over that texel's footprint.
+#pragma once
+
+#include "meso/streams/height_field.hpp"
+
+#include <vector>
+
+namespace meso {
+
+struct MinMaxPyramid {
+  // levels[0] has the height field's size; level k+1 has max(1, floor(n_k / 2)) texels per
+  // side (OpenGL's mip sizes). Two channels: 0 = minimum, 1 = maximum, normalised heights.
+  std::vector<Image> levels;
+};
+
+// Footprint semantics: texel x of a level with n texels covers u in [x/n, (x+1)/n]. The
+// filtered surface over a level-0 texel is bilinear on four sub-rectangles split at the texel
+// centre, so its extremes lie on the 9 points {0, 1/2, 1} x {0, 1/2, 1} of the texel
+// (centre, edge midpoints, corners), evaluated with the field's border rule. A coarser
+// texel takes the min/max over every finer texel whose footprint overlaps its own, so each
+// level bounds the surface exactly and conservatively whatever the sizes (powers of two
+// or not). Cost: O(texels), parallel over rows; deterministic.
+MinMaxPyramid build_min_max_pyramid(const HeightField& field);
+
+}  // namespace meso

@@ -1,0 +1,100 @@
+#include "meso/streams/pyramid.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+
+namespace meso {
+namespace {
+
+HeightField random_field(int w, int h, Border border, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> d(-3.0f, 5.0f);
+  Image img(w, h, 1);
+  for (float& v : img.pixels) v = d(rng);
+  return make_height_field(img, border);
+}
+
+TEST(HeightField, NormalisesWithScaleAndBias) {
+  Image img(3, 1, 1);
+  img.pixels = {-0.5f, 0.0f, 1.5f};
+  const HeightField f = make_height_field(img, Border::clamp);
+  EXPECT_EQ(f.bias, -0.5f);
+  EXPECT_EQ(f.scale, 2.0f);
+  EXPECT_EQ(f.height.pixels, (std::vector<float>{0.0f, 0.25f, 1.0f}));
+  const HeightField flat = make_height_field(Image(4, 4, 1, 7.0f), Border::wrap);
+  EXPECT_EQ(flat.bias, 7.0f);
+  EXPECT_EQ(flat.scale, 0.0f);
+  for (float v : flat.height.pixels) EXPECT_EQ(v, 0.0f);
+}
+
+TEST(Pyramid, SpikeHasTheKnownBilinearBounds) {
+  Image img(5, 5, 1, 0.0f);
+  img.at(2, 2) = 1.0f;
+  const MinMaxPyramid p = build_min_max_pyramid(make_height_field(img, Border::clamp));
+  const Image& l0 = p.levels[0];
+  EXPECT_EQ(l0.at(2, 2, 1), 1.0f);
+  EXPECT_EQ(l0.at(2, 2, 0), 0.25f) << "corners average the spike with three zeros";
+  EXPECT_EQ(l0.at(3, 2, 1), 0.5f) << "the shared edge's midpoint";
+  EXPECT_EQ(l0.at(3, 3, 1), 0.25f) << "the shared corner";
+  EXPECT_EQ(l0.at(4, 2, 1), 0.0f) << "two texels away the filtered surface is flat";
+  // Sizes follow OpenGL's mip chain: 5 -> 2 -> 1.
+  ASSERT_EQ(p.levels.size(), 3u);
+  EXPECT_EQ(p.levels[1].width, 2);
+  EXPECT_EQ(p.levels[2].width, 1);
+  EXPECT_EQ(p.levels[2].at(0, 0, 1), 1.0f);
+  EXPECT_EQ(p.levels[2].at(0, 0, 0), 0.0f);
+}
+
+// Samples the filtered surface on a quarter-texel grid over a footprint given in level-0
+// pixel units; the grid holds every texel's 9 extreme points when the footprint is aligned.
+void sampled_range(const HeightField& f, double x0, double x1, double y0, double y1, float& lo, float& hi) {
+  lo = 1e30f;
+  hi = -1e30f;
+  for (double y = y0; y <= y1 + 1e-9; y += 0.25)
+    for (double x = x0; x <= x1 + 1e-9; x += 0.25) {
+      const float v = f.bilinear(x, y);
+      lo = std::min(lo, v);
+      hi = std::max(hi, v);
+    }
+}
+
+struct PyramidCase {
+  int w, h;
+  Border border;
+};
+class PyramidBounds : public ::testing::TestWithParam<PyramidCase> {};
+
+// Brute force over the definition: every level's [min, max] contains the filtered surface
+// over the texel's footprint, and equals its extremes exactly where footprints are aligned
+// to level-0 texels (level 0 always; every level when the size is a power of two).
+TEST_P(PyramidBounds, ExactAndConservative) {
+  const auto c = GetParam();
+  const HeightField f = random_field(c.w, c.h, c.border, 42u + static_cast<unsigned>(c.w));
+  const MinMaxPyramid p = build_min_max_pyramid(f);
+  const bool pot = (c.w & (c.w - 1)) == 0 && (c.h & (c.h - 1)) == 0;
+  for (size_t k = 0; k < p.levels.size(); ++k) {
+    const Image& l = p.levels[k];
+    for (int y = 0; y < l.height; ++y)
+      for (int x = 0; x < l.width; ++x) {
+        const double sx = double(c.w) / l.width, sy = double(c.h) / l.height;
+        float lo, hi;
+        sampled_range(f, x * sx, (x + 1) * sx, y * sy, (y + 1) * sy, lo, hi);
+        ASSERT_LE(l.at(x, y, 0), lo + 1e-6f) << "level " << k << " texel " << x << "," << y;
+        ASSERT_GE(l.at(x, y, 1), hi - 1e-6f) << "level " << k << " texel " << x << "," << y;
+        if (k == 0 || pot) {
+          ASSERT_NEAR(l.at(x, y, 0), lo, 1e-6f) << "level " << k << " texel " << x << "," << y;
+          ASSERT_NEAR(l.at(x, y, 1), hi, 1e-6f) << "level " << k << " texel " << x << "," << y;
+        }
+      }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Sizes, PyramidBounds,
+                         ::testing::Values(PyramidCase{16, 16, Border::clamp}, PyramidCase{16, 8, Border::wrap},
+                                           PyramidCase{13, 7, Border::clamp}, PyramidCase{13, 7, Border::wrap},
+                                           PyramidCase{1, 9, Border::clamp}));
+
+}  // namespace
+}  // namespace meso
