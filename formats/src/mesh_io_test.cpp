@@ -139,3 +139,38 @@ TEST(OutputSet, LeavesNothingWithoutCommit) {
 
 }  // namespace
 }  // namespace meso
+
+#include <nlohmann/json.hpp>
+
+namespace meso {
+namespace {
+
+// glTF nodes with transforms: import flattens the hierarchy and names the face group after
+// the mesh (or node).
+TEST(MeshIo, FlattensNodeTransformsAndKeepsNames) {
+  test::TempDir dir;
+  write_mesh(test::make_seamed_cube(), dir / "cube.gltf");
+  auto doc = nlohmann::json::parse(test::read_text(dir / "cube.gltf"));
+  doc["meshes"][0]["name"] = "crate_high";
+  // A parent translating by (10, 0, 0) and a child scaling by 2.
+  doc["nodes"] = {{{"name", "parent"}, {"translation", {10.0, 0.0, 0.0}}, {"children", {1}}},
+                  {{"name", "child"}, {"scale", {2.0, 2.0, 2.0}}, {"mesh", 0}}};
+  test::write_text(dir / "nested.gltf", doc.dump());
+  const Mesh m = read_mesh(dir / "nested.gltf");
+  const Box3 b = bounding_box(m);
+  EXPECT_EQ(b.lo, Vec3f(10, 0, 0));
+  EXPECT_EQ(b.hi, Vec3f(12, 2, 2));
+  ASSERT_EQ(group_names(m).size(), 1u);
+  EXPECT_EQ(group_names(m)[0], "crate_high");
+}
+
+TEST(MeshIo, ReadsOff) {
+  test::TempDir dir;
+  test::write_text(dir / "quad.off", "OFF\n4 1 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n");
+  const Mesh m = read_mesh(dir / "quad.off");
+  EXPECT_EQ(m.n_faces(), 2u) << "the quad is triangulated in place";
+  EXPECT_EQ(m.n_vertices(), 4u);
+}
+
+}  // namespace
+}  // namespace meso
