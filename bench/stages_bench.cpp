@@ -1,0 +1,79 @@
+// Google Benchmark programs for the pipeline stages on the bundled example asset.
+// Run: build/release/bench/meso_bench --benchmark_counters_tabular=true
+// Figures and the commands that reproduce them: docs/benchmarks.md.
+#include "meso/bake/bake.hpp"
+#include "meso/examples/brick_wall.hpp"
+#include "meso/meshreduce/meshreduce.hpp"
+#include "meso/streams/pyramid.hpp"
+#include "meso/uvpack/uv_check.hpp"
+
+#include <benchmark/benchmark.h>
+
+namespace meso {
+namespace {
+
+const Mesh& high_wall() {
+  static const Mesh mesh = make_brick_wall(BrickWallOptions{});  // 262,144 triangles
+  return mesh;
+}
+
+const Mesh& base_wall() {
+  // The ideal base: the cylinder section itself, 64 x 32 quads (4,096 triangles).
+  static const Mesh mesh = make_brick_wall_base(BrickWallOptions{}, 64, 32);
+  return mesh;
+}
+
+void BM_Bake(benchmark::State& state) {
+  BakeOptions o;
+  o.width = o.height = static_cast<int>(state.range(0));
+  size_t rays = 0;
+  for (auto _ : state) {
+    const BakeResult r = bake(base_wall(), high_wall(), o);
+    rays += 2 * r.covered_texels;  // two rays per covered texel (outward and inward)
+    benchmark::DoNotOptimize(r.displacement.pixels.data());
+  }
+  state.counters["rays/s"] = benchmark::Counter(static_cast<double>(rays), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_Bake)->Arg(1024)->Arg(2048)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_MeshReduce(benchmark::State& state) {
+  ReduceOptions o;
+  o.target_faces = high_wall().n_faces() / static_cast<size_t>(state.range(0));
+  for (auto _ : state) {
+    const Mesh out = reduce_mesh(high_wall(), o);
+    benchmark::DoNotOptimize(out.n_faces());
+  }
+  state.counters["input_faces"] = static_cast<double>(high_wall().n_faces());
+  state.counters["output_faces"] = static_cast<double>(o.target_faces);
+}
+BENCHMARK(BM_MeshReduce)->Arg(10)->Arg(100)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+
+void BM_MinMaxPyramid(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  Image img(n, n, 1);
+  for (int y = 0; y < n; ++y)
+    for (int x = 0; x < n; ++x) img.at(x, y) = brick_wall_height(BrickWallOptions{}, 2.0f * x / n, 1.0f * y / n);
+  const HeightField f = make_height_field(img, Border::clamp);
+  for (auto _ : state) {
+    const MinMaxPyramid p = build_min_max_pyramid(f);
+    benchmark::DoNotOptimize(p.levels.size());
+  }
+  state.counters["texels/s"] =
+      benchmark::Counter(static_cast<double>(state.iterations()) * n * n, benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_MinMaxPyramid)->Arg(2048)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_UvCheck(benchmark::State& state) {
+  UvCheckOptions o;
+  o.size = static_cast<int>(state.range(0));
+  for (auto _ : state) {
+    const UvCheckReport r = check_uv_mapping(high_wall(), o);
+    benchmark::DoNotOptimize(r.texels_touched);
+  }
+}
+BENCHMARK(BM_UvCheck)->Arg(2048)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+}  // namespace
+}  // namespace meso
+
+BENCHMARK_MAIN();
