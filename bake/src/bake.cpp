@@ -19,9 +19,17 @@ namespace meso {
 namespace {
 
 // RAII for an Embree scene over one mesh (positions copied once, with Embree's padding).
+// Positions are stored relative to `origin` (computed in double): far from the object-space
+// origin, float coordinates are coarse (2^-7 at 65536), and ray origins and hit distances
+// computed there would be too; relative to a nearby origin they keep full precision.
 class RayScene {
  public:
-  explicit RayScene(const Mesh& mesh) : arrays_(flatten(mesh)) {
+  RayScene(const Mesh& mesh, const Eigen::Vector3d& origin) : arrays_(flatten(mesh)) {
+    for (size_t i = 0; i < arrays_.vertex_count(); ++i)
+      for (int k = 0; k < 3; ++k) {
+        float& c = arrays_.positions[3 * i + static_cast<size_t>(k)];
+        c = static_cast<float>(static_cast<double>(c) - origin[k]);
+      }
     device_ = rtcNewDevice(nullptr);
     if (!device_) throw InternalError("Embree: cannot create a device");
     scene_ = rtcNewScene(device_);
@@ -93,12 +101,15 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
   r.front = o.front > 0 ? o.front : reach;
   r.back = o.back > 0 ? o.back : reach;
 
-  // Ray start offset: far below the scale of any detail, far above float rounding at the
-  // mesh's coordinates.
+  // Ray start offset: far below the scale of any detail, far above float rounding of
+  // coordinates relative to the base's centre.
   const float eps = 1e-5f * std::max(bounding_box(high).diagonal(), bounding_box(low).diagonal());
   const auto frames = compute_tangent_frames(low);
   const auto samples = rasterize_uv(low, o.width, o.height);
-  RayScene scene(high);
+  // Work relative to the base's centre (see RayScene).
+  const Vec3f center = bounding_box(low).center();
+  const Eigen::Vector3d origin(center[0], center[1], center[2]);
+  RayScene scene(high, origin);
   // High vertex normals, indexed like the scene's vertex array.
   std::vector<Vec3f> high_normals(high.n_vertices());
   for (auto v : high.vertices()) high_normals[static_cast<size_t>(v.idx())] = high.normal(v);
@@ -126,7 +137,7 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
           const Vec3f& pv = low.point(v);
           const Vec3f& nv = low.normal(v);
           const Vec3f& tv = frames[static_cast<size_t>(h.idx())].tangent;
-          p += w * Eigen::Vector3d(pv[0], pv[1], pv[2]);
+          p += w * (Eigen::Vector3d(pv[0], pv[1], pv[2]) - origin);
           n += w * Eigen::Vector3d(nv[0], nv[1], nv[2]);
           t += w * Eigen::Vector3d(tv[0], tv[1], tv[2]);
         }
@@ -138,12 +149,12 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
         // Both ways from the base surface; the hit nearer to it wins (outward on a tie).
         // Each ray starts `eps` behind the base point so that a high surface lying exactly
         // on the base (high = low) is found by both, at distance 0.
-        auto origin = [&](double offset) {
+        auto start_at = [&](double offset) {
           const Eigen::Vector3d q = p + offset * dir;
           return Vec3f(static_cast<float>(q.x()), static_cast<float>(q.y()), static_cast<float>(q.z()));
         };
-        const auto out = scene.intersect(origin(-eps), d, r.front + eps);
-        const auto in = scene.intersect(origin(eps), -d, r.back + eps);
+        const auto out = scene.intersect(start_at(-eps), d, r.front + eps);
+        const auto in = scene.intersect(start_at(eps), -d, r.back + eps);
         const float t_out = out.valid() ? out.t - eps : 0.0f, t_in = in.valid() ? in.t - eps : 0.0f;
         const bool use_out = out.valid() && (!in.valid() || std::abs(t_out) <= std::abs(t_in));
         const auto& hit = use_out ? out : in;

@@ -57,6 +57,29 @@ INSTANTIATE_TEST_SUITE_P(Planes, BakePlane,
                          ::testing::Values(PlaneCase{0, 0, 0.05f}, PlaneCase{0, 0, -0.05f}, PlaneCase{0.1f, -0.05f, 0.01f},
                                            PlaneCase{-0.2f, 0.1f, -0.02f}, PlaneCase{0, 0, 0}));
 
+// Far from the origin float coordinates are coarse (2^-7 at 65536). Here every vertex is
+// exactly representable there (multiples of 1/4, heights multiples of 2^-7) but texel centres
+// (multiples of 1/48) are not: a bake that casts from absolute float coordinates is off by
+// up to a * 2^-8; one that works relative to the base keeps float precision of small numbers.
+TEST(Bake, HugeCoordinatesKeepSmallDisplacementsExact) {
+  const float a = 0.125f, b = -0.0625f, c = 0.0625f;
+  const Vec3f offset(65536.0f, -65536.0f, 65536.0f);
+  Mesh low = test::make_grid(4, 2);
+  Mesh high = make_plane(a, b, c);
+  for (auto v : low.vertices()) low.set_point(v, low.point(v) + offset);
+  for (auto v : high.vertices()) high.set_point(v, high.point(v) + offset);
+  BakeOptions o;
+  o.width = o.height = 24;
+  o.front = o.back = 0.5f;
+  const BakeResult r = bake(low, high, o);
+  EXPECT_EQ(r.misses, 0u);
+  for (int y = 0; y < o.height; ++y)
+    for (int x = 0; x < o.width; ++x) {
+      const float u = texel_center_u(x, o.width), v = texel_center_v(y, o.height);
+      ASSERT_NEAR(r.displacement.at(x, y), a * u + b * v + c, 2e-6f) << x << "," << y;
+    }
+}
+
 TEST(Bake, IdenticalMeshesGiveZeroAndFlatNormals) {
   const Mesh cube = test::make_seamed_cube();
   BakeOptions o;
