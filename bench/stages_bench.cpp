@@ -4,6 +4,7 @@
 #include "meso/bake/bake.hpp"
 #include "meso/examples/brick_wall.hpp"
 #include "meso/meshreduce/meshreduce.hpp"
+#include "meso/streams/distance_field.hpp"
 #include "meso/streams/pyramid.hpp"
 #include "meso/uvpack/uv_check.hpp"
 
@@ -48,12 +49,17 @@ void BM_MeshReduce(benchmark::State& state) {
 }
 BENCHMARK(BM_MeshReduce)->Arg(10)->Arg(100)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 
-void BM_MinMaxPyramid(benchmark::State& state) {
-  const int n = static_cast<int>(state.range(0));
+// The example's height function sampled on an n x n map.
+HeightField brick_height_field(int n) {
   Image img(n, n, 1);
   for (int y = 0; y < n; ++y)
     for (int x = 0; x < n; ++x) img.at(x, y) = brick_wall_height(BrickWallOptions{}, 2.0f * x / n, 1.0f * y / n);
-  const HeightField f = make_height_field(img, Border::clamp);
+  return make_height_field(img, Border::clamp);
+}
+
+void BM_MinMaxPyramid(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const HeightField f = brick_height_field(n);
   for (auto _ : state) {
     const MinMaxPyramid p = build_min_max_pyramid(f);
     benchmark::DoNotOptimize(p.levels.size());
@@ -62,6 +68,20 @@ void BM_MinMaxPyramid(benchmark::State& state) {
       benchmark::Counter(static_cast<double>(state.iterations()) * n * n, benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_MinMaxPyramid)->Arg(2048)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_DistanceField(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const HeightField f = brick_height_field(n);
+  DistanceFieldOptions o;
+  o.depth = 32;
+  for (auto _ : state) {
+    const DistanceField df = build_distance_field(f, o);
+    benchmark::DoNotOptimize(df.distance.data());
+  }
+  state.counters["voxels/s"] =
+      benchmark::Counter(static_cast<double>(state.iterations()) * n * n * o.depth, benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_DistanceField)->Arg(256)->Arg(1024)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_UvCheck(benchmark::State& state) {
   UvCheckOptions o;

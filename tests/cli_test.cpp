@@ -66,6 +66,7 @@ TEST(Cli, BadUsageExitsTwo) {
   EXPECT_EQ(run("bake --low a.obj --high b.obj -o d --size 12x").code, 2);
   EXPECT_EQ(run("preview --headless base.obj --maps d").code, 2) << "--headless without --png";
   EXPECT_EQ(run("streams pyramid h.exr -o p.exr --wrap --clamp").code, 2);
+  EXPECT_EQ(run("streams sdf h.exr -o s.exr --depth 0").code, 2);
 }
 
 TEST(Cli, BadInputExitsThreeWithOneLineNamingTheFileAndNoOutput) {
@@ -164,6 +165,33 @@ TEST_F(Skeleton, WholePipeline) {
   const Result bake = run("bake --low " + (d / "reduced.obj").string() + " --high " + (d / "high.obj").string() + " -o " +
                        (d / "maps").string() + " --size 128x64");
   ASSERT_EQ(bake.code, 0) << bake.err;
+
+  const Result pyramid = run("streams pyramid " + (d / "maps" / "displacement.exr").string() + " -o " +
+                             (d / "pyramid.exr").string() + " --json");
+  ASSERT_EQ(pyramid.code, 0) << pyramid.err;
+  const auto levels = read_image_levels(d / "pyramid.exr");
+  ASSERT_EQ(levels.size(), 8u) << "128x64 -> ... -> 1x1";
+  EXPECT_EQ(levels.back().at(0, 0, 0), 0.0f) << "normalised minimum";
+  EXPECT_EQ(levels.back().at(0, 0, 1), 1.0f) << "normalised maximum";
+  EXPECT_EQ(nlohmann::json::parse(pyramid.out)["levels"], 8);
+
+  const Result sdf = run("streams sdf " + (d / "maps" / "displacement.exr").string() + " -o " + (d / "sdf.exr").string() +
+                         " --depth 8 --relief 0.05");
+  ASSERT_EQ(sdf.code, 0) << sdf.err;
+  const Image field = read_image(d / "sdf.exr");
+  EXPECT_EQ(field.width, 128);
+  EXPECT_EQ(field.height, 64 * 8);
+  EXPECT_EQ(std::get<int>(field.metadata.at("depth")), 8);
+  // In the top slice (normalised height 15/16) a voxel is inside the solid exactly where the
+  // pyramid says the filtered surface reaches that high over its texel.
+  size_t inside = 0;
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 128; ++x) {
+      const bool solid = levels[0].at(x, y, 1) >= 15.0f / 16.0f;
+      inside += solid;
+      ASSERT_EQ(field.at(x, 7 * 64 + y) == 0.0f, solid) << x << "," << y;
+    }
+  EXPECT_LT(inside, 128u * 64u / 2);
 
   const Result preview = run("preview " + (d / "reduced.obj").string() + " --maps " + (d / "maps").string() +
                           " --method pom --headless --png " + (d / "pom.png").string() + " --size 96x64 --view-angle 45");

@@ -3,35 +3,58 @@
 #include "meso/core/error.hpp"
 #include "meso/formats/atomic_file.hpp"
 #include "meso/formats/image_io.hpp"
+#include "meso/streams/distance_field.hpp"
 #include "meso/streams/pyramid.hpp"
 
 namespace meso::cli {
 
+namespace {
+
+// What every stream subcommand takes: the height map, the output, the border rule, precision.
+struct StreamArgs {
+  std::string input, output;
+  bool wrap = false, clamp = false, half = false;
+};
+
+CLI::App* add_stream_subcommand(CLI::App* streams, const std::string& name, const std::string& what,
+                                const std::string& output_help, StreamArgs& a) {
+  CLI::App* sub = streams->add_subcommand(name, what);
+  sub->add_option("height", a.input, "Height map: EXR/PNG/TIFF, channel 0 (e.g. meso bake's displacement.exr)")->required();
+  sub->add_option("-o,--output", a.output, output_help)->required();
+  auto* wrap = sub->add_flag("--wrap", a.wrap, "The map tiles: lookups wrap around the borders");
+  sub->add_flag("--clamp", a.clamp, "Lookups clamp to the edge texels (the default)")->excludes(wrap);
+  sub->add_flag("--half", a.half, "Store half floats instead of float32");
+  return sub;
+}
+
+HeightField load_height_field(const StreamArgs& a) {
+  return make_height_field(read_image(a.input), a.wrap ? Border::wrap : Border::clamp);
+}
+
+ImageMetadata height_metadata(const HeightField& field, const std::string& quantity, const std::string& channels) {
+  return {{"quantity", quantity},
+          {"channels", channels},
+          {"height_scale", field.scale},
+          {"height_bias", field.bias},
+          {"height_units", std::string("normalised: object = bias + scale * value")},
+          {"border", std::string(border_name(field.border))}};
+}
+
+}  // namespace
+
 void add_streams(CLI::App& app, Context& ctx) {
   CLI::App* streams = app.add_subcommand("streams", "Precompute data for per-pixel displacement from a height map");
   streams->require_subcommand(1);
-  struct Args {
-    std::string input, output;
-    bool wrap = false, clamp = false, half = false;
-  };
-  auto args = std::make_shared<Args>();
-  CLI::App* pyramid = streams->add_subcommand("pyramid", "Min-max MIP pyramid of the bilinearly filtered height surface");
-  pyramid->add_option("height", args->input, "Height map: EXR/PNG/TIFF, channel 0 (e.g. meso bake's displacement.exr)")->required();
-  pyramid->add_option("-o,--output", args->output, "Output EXR (MIP-mapped: R = minimum, G = maximum)")->required();
-  auto* wrap = pyramid->add_flag("--wrap", args->wrap, "The map tiles: lookups wrap around the borders");
-  pyramid->add_flag("--clamp", args->clamp, "Lookups clamp to the edge texels (the default)")->excludes(wrap);
-  pyramid->add_flag("--half", args->half, "Store half floats instead of float32");
+  auto args = std::make_shared<StreamArgs>();
+  CLI::App* pyramid = add_stream_subcommand(streams, "pyramid", "Min-max MIP pyramid of the bilinearly filtered height surface",
+                                            "Output EXR (MIP-mapped: R = minimum, G = maximum)", *args);
   pyramid->callback([&ctx, args] {
     ctx.run = [&ctx, args](nlohmann::json& report, Progress&) {
-      const Image height = read_image(args->input);
-      const HeightField field = make_height_field(height, args->wrap ? Border::wrap : Border::clamp);
+      const HeightField field = load_height_field(*args);
+      const Image& height = field.height;
       MinMaxPyramid p = build_min_max_pyramid(field);
-      p.levels[0].metadata = {{"quantity", std::string("min-max pyramid")},
-                              {"channels", std::string("R = minimum, G = maximum of the bilinear height surface over each texel")},
-                              {"height_scale", field.scale},
-                              {"height_bias", field.bias},
-                              {"height_units", std::string("normalised: object = bias + scale * value")},
-                              {"border", std::string(border_name(field.border))}};
+      p.levels[0].metadata = height_metadata(field, "min-max pyramid",
+                                             "R = minimum, G = maximum of the bilinear height surface over each texel");
       OutputSet outputs;
       write_image_levels(p.levels, outputs.add(args->output), args->half ? PixelFormat::half : PixelFormat::float32);
       outputs.commit();
@@ -45,6 +68,35 @@ void add_streams(CLI::App& app, Context& ctx) {
                 {"scale", field.scale},
                 {"bias", field.bias},
                 {"border", border_name(field.border)}};
+      return 0;
+    };
+  });
+
+  auto sdf_args = std::make_shared<StreamArgs>();
+  auto sdf_options = std::make_shared<DistanceFieldOptions>();
+  CLI::App* sdf = add_stream_subcommand(streams, "sdf", "3D distance field over the height field, for sphere tracing",
+                                        "Output EXR: W x (H * depth), slices stacked, slice 0 lowest", *sdf_args);
+  sdf->add_option("--depth", sdf_options->depth, "Slices along the height axis")->check(CLI::Range(1, 1024));
+  sdf->add_option("--relief", sdf_options->relief, "Height range in units of the map's width (the box is 1 x H/W x relief)")
+      ->check(CLI::PositiveNumber);
+  sdf->callback([&ctx, sdf_args, sdf_options] {
+    ctx.run = [&ctx, sdf_args, sdf_options](nlohmann::json& report, Progress&) {
+      const HeightField field = load_height_field(*sdf_args);
+      const DistanceField df = build_distance_field(field, *sdf_options);
+      Image img = distance_field_image(df);
+      img.metadata = height_metadata(field, "distance field",
+                                     "Y = distance from the voxel centre to the solid under the filtered height surface, units of u");
+      img.metadata["depth"] = df.depth;
+      img.metadata["relief"] = df.relief;
+      img.metadata["layout"] = std::string("slice k in rows [k H, (k+1) H), slice 0 lowest; voxel centre (x+0.5)/W, (y+0.5)/H, (k+0.5)/depth");
+      OutputSet outputs;
+      write_image(img, outputs.add(sdf_args->output), sdf_args->half ? PixelFormat::half : PixelFormat::float32);
+      outputs.commit();
+      info(ctx.globals, "wrote " + sdf_args->output + " (" + std::to_string(df.width) + "x" + std::to_string(df.height) + "x" +
+                            std::to_string(df.depth) + " voxels)");
+      report = {{"command", "streams sdf"}, {"input", sdf_args->input}, {"output", sdf_args->output},
+                {"width", df.width}, {"height", df.height}, {"depth", df.depth}, {"relief", df.relief},
+                {"bytes", img.pixels.size() * (sdf_args->half ? 2 : 4)}};
       return 0;
     };
   });

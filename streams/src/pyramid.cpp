@@ -7,8 +7,7 @@
 
 namespace meso {
 
-MinMaxPyramid build_min_max_pyramid(const HeightField& f) {
-  MinMaxPyramid p;
+Image footprint_min_max(const HeightField& f) {
   const int w = f.height.width, h = f.height.height;
   Image level0(w, h, 2);
   tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {
@@ -30,7 +29,12 @@ MinMaxPyramid build_min_max_pyramid(const HeightField& f) {
       }
     }
   });
-  p.levels.push_back(std::move(level0));
+  return level0;
+}
+
+MinMaxPyramid build_min_max_pyramid(const HeightField& f) {
+  MinMaxPyramid p;
+  p.levels.push_back(footprint_min_max(f));
   while (p.levels.back().width > 1 || p.levels.back().height > 1) {
     const Image& fine = p.levels.back();
     const int fw = fine.width, fh = fine.height;

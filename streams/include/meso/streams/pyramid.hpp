@@ -24,4 +24,8 @@ struct MinMaxPyramid {
 // or not). Cost: O(texels), parallel over rows; deterministic.
 MinMaxPyramid build_min_max_pyramid(const HeightField& field);
 
+// Level 0 alone: per texel, the exact min (channel 0) and max (channel 1) of the filtered
+// surface over the texel's footprint.
+Image footprint_min_max(const HeightField& field);
+
 }  // namespace meso

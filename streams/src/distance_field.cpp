@@ -1,0 +1,132 @@
+#include "meso/streams/distance_field.hpp"
+
+#include "meso/streams/pyramid.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace meso {
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// One-dimensional squared distance transform (Felzenszwalb & Huttenlocher 2012, "Distance
+// Transforms of Sampled Functions", algorithm DT(f)): the lower envelope of the parabolas
+// (q - p)^2 + f(p) rooted at samples p = 0..n-1, evaluated at any positions q. f is finite.
+struct LowerEnvelope {
+  std::vector<int> v;      // roots of the parabolas on the envelope, left to right
+  std::vector<double> z;   // z[j], z[j+1]: where parabola v[j] is lowest
+  int k = 0;               // index of the last parabola on the envelope
+
+  void build(const double* f, int n, int stride) {
+    v.resize(static_cast<size_t>(n));
+    z.resize(static_cast<size_t>(n) + 1);
+    auto at = [&](int p) { return f[static_cast<size_t>(p) * static_cast<size_t>(stride)] + double(p) * p; };
+    k = 0;
+    v[0] = 0;
+    z[0] = -kInf;
+    z[1] = kInf;
+    for (int q = 1; q < n; ++q) {
+      // Intersection with the last parabola; pop parabolas the new one hides entirely.
+      // z[0] = -inf ends the loop at k = 0.
+      double s = (at(q) - at(v[static_cast<size_t>(k)])) / (2.0 * (q - v[static_cast<size_t>(k)]));
+      while (s <= z[static_cast<size_t>(k)]) {
+        --k;
+        s = (at(q) - at(v[static_cast<size_t>(k)])) / (2.0 * (q - v[static_cast<size_t>(k)]));
+      }
+      ++k;
+      v[static_cast<size_t>(k)] = q;
+      z[static_cast<size_t>(k)] = s;
+      z[static_cast<size_t>(k) + 1] = kInf;
+    }
+  }
+
+  // Evaluates at non-decreasing positions q through one cursor, walking the envelope once.
+  struct Cursor {
+    int j = 0;
+  };
+  double eval(const double* f, int stride, double q, Cursor& c) const {
+    while (z[static_cast<size_t>(c.j) + 1] < q) ++c.j;
+    const int p = v[static_cast<size_t>(c.j)];
+    return (q - p) * (q - p) + f[static_cast<size_t>(p) * static_cast<size_t>(stride)];
+  }
+};
+
+}  // namespace
+
+DistanceField build_distance_field(const HeightField& field, const DistanceFieldOptions& o) {
+  const int w = field.height.width, h = field.height.height, d = std::max(1, o.depth);
+  DistanceField df;
+  df.width = w;
+  df.height = h;
+  df.depth = d;
+  df.relief = o.relief;
+  df.distance.assign(static_cast<size_t>(w) * static_cast<size_t>(h) * static_cast<size_t>(d), 0.0f);
+
+  // Box heights: the maximum of the filtered surface over each texel footprint.
+  const Image top = footprint_min_max(field);
+  // Grid of half-texel spacing: point (a, b) sits at (a/2, b/2) texels, a in [0, 2W], b in
+  // [0, 2H]. Its height is the tallest box it belongs to (a corner touches up to four).
+  const int gw = 2 * w + 1, gh = 2 * h + 1;
+  std::vector<float> grid_top(static_cast<size_t>(gw) * static_cast<size_t>(gh), -1.0f);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const float m = top.at(x, y, 1);
+      for (int b = 2 * y; b <= 2 * y + 2; ++b)
+        for (int a = 2 * x; a <= 2 * x + 2; ++a) {
+          float& g = grid_top[static_cast<size_t>(b) * static_cast<size_t>(gw) + static_cast<size_t>(a)];
+          g = std::max(g, m);
+        }
+    }
+  // Units: half texels horizontally; the height axis scaled so that normalised height 1 spans
+  // relief * W texels = 2 relief W half-texels.
+  const double z_scale = 2.0 * static_cast<double>(o.relief) * w;
+  const double to_u = 1.0 / (2.0 * w);  // half texels -> units of u
+
+  const size_t W = static_cast<size_t>(w), GW = static_cast<size_t>(gw), GH = static_cast<size_t>(gh);
+  tbb::parallel_for(tbb::blocked_range<int>(0, d), [&](const tbb::blocked_range<int>& slices) {
+    std::vector<double> line(std::max(GW, GH));  // one row or column of squared distances
+    std::vector<float> inter(W * GH);            // after the x pass, transposed: [x][b]
+    LowerEnvelope env;
+    for (int k = slices.begin(); k < slices.end(); ++k) {
+      const double zk = (k + 0.5) / d;
+      // Pass 1, along x on every grid row; f is the squared height gap to the row's boxes.
+      // Evaluated only at texel centres a = 2x + 1 and stored transposed, so that pass 2
+      // reads contiguous columns.
+      for (size_t b = 0; b < GH; ++b) {
+        const float* tops = grid_top.data() + b * GW;
+        for (size_t a = 0; a < GW; ++a) {
+          const double dz = std::max(0.0, zk - static_cast<double>(tops[a])) * z_scale;
+          line[a] = dz * dz;
+        }
+        env.build(line.data(), gw, 1);
+        LowerEnvelope::Cursor c;
+        for (size_t x = 0; x < W; ++x) inter[x * GH + b] = static_cast<float>(env.eval(line.data(), 1, 2.0 * x + 1, c));
+      }
+      // Pass 2, along y on every texel-centre column; evaluated at b = 2y + 1.
+      float* slice = df.distance.data() + static_cast<size_t>(k) * static_cast<size_t>(h) * W;
+      for (size_t x = 0; x < W; ++x) {
+        const float* col = inter.data() + x * GH;
+        std::copy(col, col + GH, line.begin());
+        env.build(line.data(), gh, 1);
+        LowerEnvelope::Cursor c;
+        for (int y = 0; y < h; ++y)
+          slice[static_cast<size_t>(y) * W + x] = static_cast<float>(std::sqrt(env.eval(line.data(), 1, 2.0 * y + 1, c)) * to_u);
+      }
+    }
+  });
+  return df;
+}
+
+Image distance_field_image(const DistanceField& field) {
+  Image img(field.width, field.height * field.depth, 1);
+  img.pixels = field.distance;
+  return img;
+}
+
+}  // namespace meso
