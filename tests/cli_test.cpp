@@ -67,6 +67,9 @@ TEST(Cli, BadUsageExitsTwo) {
   EXPECT_EQ(run("preview --headless base.obj --maps d").code, 2) << "--headless without --png";
   EXPECT_EQ(run("streams pyramid h.exr -o p.exr --wrap --clamp").code, 2);
   EXPECT_EQ(run("streams sdf h.exr -o s.exr --depth 0").code, 2);
+  EXPECT_EQ(run("preview base.obj --maps d --headless --png p.png --zoom nan").code, 2);
+  EXPECT_EQ(run("meshreduce in.obj -o out.obj --ratio nan").code, 2);
+  EXPECT_EQ(run("streams sdf h.exr -o s.exr --relief inf").code, 2);
 }
 
 TEST(Cli, BadInputExitsThreeWithOneLineNamingTheFileAndNoOutput) {
@@ -74,6 +77,9 @@ TEST(Cli, BadInputExitsThreeWithOneLineNamingTheFileAndNoOutput) {
   test::write_text(dir / "garbage.obj", "\x7f\x45\x4c\x46 definitely not a mesh \x01\x02");
   test::write_text(dir / "nan.obj", "v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n");
   test::write_text(dir / "nouv.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n");
+  // Non-manifold (import warns) and without UVs (bake fails): still exactly one line.
+  test::write_text(dir / "fan.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 1 0 1\nf 1 2 3\nf 2 4 3\nf 2 3 5\n");
+  test::write_text(dir / "nan.exr", "");
   struct Case {
     std::string args, file;
   };
@@ -86,6 +92,10 @@ TEST(Cli, BadInputExitsThreeWithOneLineNamingTheFileAndNoOutput) {
            (dir / "maps").string() + " --size 16",
        "nouv.obj"},
       {"uvpack check " + (dir / "nouv.obj").string() + " --size 16 -o " + (dir / "o.png").string(), "nouv.obj"},
+      {"bake --low " + (dir / "fan.obj").string() + " --high " + (dir / "nouv.obj").string() + " -o " +
+           (dir / "maps").string() + " --size 16",
+       "fan.obj"},
+      {"streams pyramid " + (dir / "nan.exr").string() + " -o " + (dir / "o.png").string(), "nan.exr"},
   };
   for (const auto& c : cases) {
     const Result r = run(c.args);

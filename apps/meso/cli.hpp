@@ -10,6 +10,8 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace meso::cli {
 
@@ -17,6 +19,9 @@ struct Globals {
   int threads = 0;  // 0: all cores
   bool quiet = false;
   bool json = false;
+  // Informational and warning lines, printed on stderr only when the run succeeds, so that a
+  // failing run prints exactly one line: its error.
+  std::vector<std::pair<bool, std::string>> messages;  // (is_warning, text)
 };
 
 // A subcommand's run function fills `report` (printed on stdout with --json) and may
@@ -24,7 +29,7 @@ struct Globals {
 using RunFn = std::function<int(nlohmann::json& report, Progress& progress)>;
 
 struct Context {
-  const Globals& globals;
+  Globals& globals;
   // Set by the subcommand that CLI11 selected.
   RunFn run;
 };
@@ -37,9 +42,13 @@ void add_frames(CLI::App& app, Context& ctx);
 void add_streams(CLI::App& app, Context& ctx);
 void add_preview(CLI::App& app, Context& ctx);
 
-// Informational lines on stderr ("meso: ..."), silenced by --quiet.
-void info(const Globals& g, const std::string& message);
-void warn(const Globals& g, const std::string& message);
+// Informational lines and warnings on stderr ("meso: info: ...", "meso: warning: ..."),
+// silenced by --quiet, held back until the run has succeeded.
+void info(Globals& g, const std::string& message);
+void warn(Globals& g, const std::string& message);
+
+// A validator for floating-point options: refuses NaN and infinities.
+extern const CLI::Validator Finite;
 
 // "512" or "512x256" -> width, height. Throws UsageError.
 void parse_size(const std::string& text, int& width, int& height);
@@ -50,5 +59,5 @@ void parse_size(const std::string& text, int& width, int& height);
 
 namespace meso::cli {
 // Reads a mesh file, warns about what import had to repair, and records counts in `report`.
-Mesh load_mesh(const Globals& g, const std::string& path, nlohmann::json& report);
+Mesh load_mesh(Globals& g, const std::string& path, nlohmann::json& report);
 }  // namespace meso::cli

@@ -21,7 +21,7 @@ void add_meshreduce(CLI::App& app, Context& ctx) {
   sub->add_option("-o,--output", args->output, "Output mesh (.obj, .ply, .gltf, .glb)")->required();
   auto* faces = sub->add_option("--faces", args->faces, "Target face count")->check(CLI::PositiveNumber);
   auto* ratio = sub->add_option("--ratio", args->ratio, "Target as a fraction of the input's faces")
-                    ->check(CLI::Range(0.0, 1.0));
+                    ->check(CLI::Range(0.0, 1.0) & Finite);
   faces->excludes(ratio);
   sub->callback([&ctx, args, faces, ratio] {
     if (faces->count() + ratio->count() != 1) throw CLI::ValidationError("meshreduce", "give exactly one target: --faces N or --ratio R");

@@ -28,9 +28,9 @@ void add_preview(CLI::App& app, Context& ctx) {
   sub->add_option("--size", args->size, "Image size WxH");
   sub->add_option("--view-angle", args->options.camera.view_angle,
                   "Degrees between the view direction and the mesh's mean normal (0 to 89.9)")
-      ->check(CLI::Range(0.0, 89.9));
-  sub->add_option("--azimuth", args->options.camera.azimuth, "Degrees around the mean normal");
-  sub->add_option("--zoom", args->options.camera.zoom, "Zoom factor (> 1 moves closer)")->check(CLI::PositiveNumber);
+      ->check(CLI::Range(0.0, 89.9) & Finite);
+  sub->add_option("--azimuth", args->options.camera.azimuth, "Degrees around the mean normal")->check(Finite);
+  sub->add_option("--zoom", args->options.camera.zoom, "Zoom factor (> 1 moves closer)")->check(CLI::PositiveNumber & Finite);
   sub->add_option("--iterations", args->options.iterations, "Main iteration budget of the method")->check(CLI::Range(1, 4096));
   sub->add_option("--shade", args->shade, "lit, uv (visible point's UV in R,G) or height")
       ->check(CLI::IsMember({"lit", "uv", "height"}));

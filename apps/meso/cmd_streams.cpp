@@ -78,7 +78,7 @@ void add_streams(CLI::App& app, Context& ctx) {
                                         "Output EXR: W x (H * depth), slices stacked, slice 0 lowest", *sdf_args);
   sdf->add_option("--depth", sdf_options->depth, "Slices along the height axis")->check(CLI::Range(1, 1024));
   sdf->add_option("--relief", sdf_options->relief, "Height range in units of the map's width (the box is 1 x H/W x relief)")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::PositiveNumber & Finite);
   sdf->callback([&ctx, sdf_args, sdf_options] {
     ctx.run = [&ctx, sdf_args, sdf_options](nlohmann::json& report, Progress&) {
       const HeightField field = load_height_field(*sdf_args);

@@ -5,7 +5,6 @@
 #include "meso/formats/image_io.hpp"
 #include "meso/uvpack/uv_check.hpp"
 
-#include <fstream>
 
 namespace meso::cli {
 
@@ -43,9 +42,7 @@ void add_uvpack(CLI::App& app, Context& ctx) {
       OutputSet outputs;
       if (!args->overlay.empty()) write_image(r.overlay, outputs.add(args->overlay), PixelFormat::uint8);
       if (!args->report.empty()) {
-        std::ofstream f(outputs.add(args->report));
-        f << report.dump(2) << '\n';
-        if (!f) throw InternalError(args->report + ": cannot write");
+        outputs.write_text(args->report, report.dump(2) + "\n");
       }
       outputs.commit();
       info(ctx.globals, args->input + ": " + std::to_string(r.charts) + " charts, " +

@@ -4,7 +4,7 @@
 
 namespace meso::cli {
 
-Mesh load_mesh(const Globals& g, const std::string& path, nlohmann::json& report) {
+Mesh load_mesh(Globals& g, const std::string& path, nlohmann::json& report) {
   MeshReadReport r;
   Mesh mesh = read_mesh(path, &r);
   if (r.isolated_faces)

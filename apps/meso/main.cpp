@@ -9,6 +9,7 @@
 #include <tbb/global_control.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <optional>
@@ -19,12 +20,24 @@
 
 namespace meso::cli {
 
-void info(const Globals& g, const std::string& message) {
-  if (!g.quiet) spdlog::info("{}", message);
+void info(Globals& g, const std::string& message) {
+  if (!g.quiet) g.messages.emplace_back(false, message);
 }
-void warn(const Globals& g, const std::string& message) {
-  if (!g.quiet) spdlog::warn("{}", message);
+void warn(Globals& g, const std::string& message) {
+  if (!g.quiet) g.messages.emplace_back(true, message);
 }
+
+const CLI::Validator Finite(
+    [](std::string& text) -> std::string {
+      try {
+        size_t used = 0;
+        const double v = std::stod(text, &used);
+        if (used == text.size() && std::isfinite(v)) return {};
+      } catch (const std::exception&) {
+      }
+      return "'" + text + "' is not a finite number";
+    },
+    "FINITE");
 
 void parse_size(const std::string& text, int& width, int& height) {
   const auto x = text.find('x');
@@ -47,6 +60,11 @@ void parse_size(const std::string& text, int& width, int& height) {
 }
 
 }  // namespace meso::cli
+
+namespace {
+// Library messages (OIIO, assimp) can span lines; the contract is one line per error.
+std::string first_line(const std::string& text) { return text.substr(0, text.find('\n')); }
+}  // namespace
 
 int main(int argc, char** argv) {
   using namespace meso;
@@ -92,14 +110,21 @@ int main(int argc, char** argv) {
     if (!ctx.run) throw UsageError("no command given (see meso --help)");
     code = ctx.run(report, progress);
   } catch (const Error& e) {
-    std::fprintf(stderr, "meso: error: %s\n", e.what());
+    progress.abandon();
+    std::fprintf(stderr, "meso: error: %s\n", first_line(e.what()).c_str());
     return static_cast<int>(e.code());
   } catch (const std::bad_alloc&) {
+    progress.abandon();
     std::fprintf(stderr, "meso: error: out of memory\n");
     return static_cast<int>(ExitCode::internal);
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "meso: internal error: %s\n", e.what());
+    progress.abandon();
+    std::fprintf(stderr, "meso: internal error: %s\n", first_line(e.what()).c_str());
     return static_cast<int>(ExitCode::internal);
+  }
+  for (const auto& [is_warning, text] : globals.messages) {
+    if (is_warning) spdlog::warn("{}", text);
+    else spdlog::info("{}", text);
   }
   if (globals.json) std::cout << report.dump(2) << std::endl;
   return code;

@@ -204,9 +204,9 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
   for (size_t i = 0; i < written.size(); ++i) {
     if (!written[i]) r.normal_ts.pixels[3 * i + 2] = 1.0f;
   }
-  std::vector<uint8_t> written_n = written;
-  dilate(r.displacement, written, o.dilate);
-  dilate(r.normal_ts, written_n, o.dilate);
+  const auto sources = dilation_sources(written, o.width, o.height, o.dilate);
+  apply_dilation(r.displacement, sources);
+  apply_dilation(r.normal_ts, sources);
 
   r.displacement.metadata = {{"quantity", std::string("displacement")},
                              {"units", std::string("object")},

@@ -1,6 +1,7 @@
 #include "meso/bake/bake.hpp"
 
 #include "meso/bake/dilate.hpp"
+#include "meso/bake/uv_raster.hpp"
 #include "meso/examples/brick_wall.hpp"
 #include "test_support.hpp"
 
@@ -128,6 +129,29 @@ TEST(Bake, MissesAreCountedAndFilled) {
   EXPECT_EQ(r.hits, 0u);
   EXPECT_EQ(r.misses, 64u);
   for (float d : r.displacement.pixels) EXPECT_EQ(d, 0.0f);
+}
+
+// Texel centres lying exactly on the diagonal shared by a quad's two triangles belong to one
+// of them: no texel of a chart may fall through the crack between its faces.
+TEST(UvRaster, CentresOnSharedEdgesAreCovered) {
+  const Mesh quad = test::make_grid(1, 1);
+  for (int n : {4, 5, 64}) {
+    const auto samples = rasterize_uv(quad, n, n);
+    for (size_t i = 0; i < samples.size(); ++i) {
+      ASSERT_GE(samples[i].face, 0) << "texel " << i << " at " << n << "^2";
+      const auto& b = samples[i].bary;
+      ASSERT_NEAR(b[0] + b[1] + b[2], 1.0f, 1e-6f);
+      ASSERT_TRUE(b[0] >= 0 && b[1] >= 0 && b[2] >= 0);
+    }
+  }
+}
+
+TEST(UvRaster, FarOutUvsAreSafe) {
+  Mesh m = test::make_grid(2, 1);
+  for (auto h : face_halfedges(m, FaceHandle(0))) m.set_texcoord2D(h, m.texcoord2D(h) * 1e9f + Vec2f(2e9f, 0));
+  for (auto h : face_halfedges(m, FaceHandle(1))) m.set_texcoord2D(h, m.texcoord2D(h) - Vec2f(3e9f, 3e9f));
+  const auto samples = rasterize_uv(m, 16, 16);
+  for (const auto& s : samples) EXPECT_TRUE(s.face != 0 && s.face != 1);
 }
 
 TEST(Dilate, CopiesTheNearestWrittenTexelUpToTheRadius) {

@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 
 namespace meso {
 
@@ -79,13 +78,12 @@ std::vector<TangentFrame> compute_tangent_frames(const Mesh& mesh) {
     }
     for (auto h : incoming) {
       const auto& gh = grad[static_cast<size_t>(mesh.face_handle(h).idx())];
-      const Vec2f uv = mesh.texcoord2D(h);
       // Sum over corners at v that share this corner's UV and mirroring.
       Vec3d t_sum(0, 0, 0), b_sum(0, 0, 0);
       double du_sum = 0, dv_sum = 0, w_sum = 0;
       for (auto g : incoming) {
         const auto& gg = grad[static_cast<size_t>(mesh.face_handle(g).idx())];
-        if (std::memcmp(&mesh.texcoord2D(g), &uv, sizeof(Vec2f)) != 0) continue;
+        if (!same_uv(mesh, g, h)) continue;
         if (!gg.valid || gg.mirrored != gh.mirrored) continue;
         const double w = corner_angle(mesh, g);
         Vec3d t = gg.dpdu - n * OpenMesh::dot(n, gg.dpdu);

@@ -11,32 +11,36 @@ std::vector<TexelSample> rasterize_uv(const Mesh& mesh, int width, int height) {
   std::vector<TexelSample> out(static_cast<size_t>(width) * static_cast<size_t>(height));
   for (auto f : mesh.faces()) {
     const auto hs = face_halfedges(mesh, f);
-    // Pixel coordinates of the corners: x = u * W, y = (1 - v) * H, texel centres at +0.5.
+    // A face with no UV area covers nothing (the same rule as uvpack's degenerate faces).
+    if (uv_double_area(mesh, f) == 0.0f) continue;
     double px[3], py[3];
     for (int i = 0; i < 3; ++i) {
       const Vec2f t = mesh.texcoord2D(hs[static_cast<size_t>(i)]);
-      px[i] = static_cast<double>(t[0]) * width;
-      py[i] = (1.0 - static_cast<double>(t[1])) * height;
+      px[i] = uv_to_pixel_x(t[0], width);
+      py[i] = uv_to_pixel_y(t[1], height);
     }
     const double area = (px[1] - px[0]) * (py[2] - py[0]) - (py[1] - py[0]) * (px[2] - px[0]);
     if (!(std::abs(area) > 0)) continue;
-    const int x0 = std::max(0, static_cast<int>(std::floor(std::min({px[0], px[1], px[2]}) - 0.5)));
-    const int x1 = std::min(width - 1, static_cast<int>(std::ceil(std::max({px[0], px[1], px[2]}) - 0.5)));
-    const int y0 = std::max(0, static_cast<int>(std::floor(std::min({py[0], py[1], py[2]}) - 0.5)));
-    const int y1 = std::min(height - 1, static_cast<int>(std::ceil(std::max({py[0], py[1], py[2]}) - 0.5)));
+    int x0, x1, y0, y1;
+    if (!texel_centres_in(std::min({px[0], px[1], px[2]}), std::max({px[0], px[1], px[2]}), width, x0, x1)) continue;
+    if (!texel_centres_in(std::min({py[0], py[1], py[2]}), std::max({py[0], py[1], py[2]}), height, y0, y1)) continue;
+    // A centre exactly on an edge shared by two faces must be taken by one of them: each
+    // barycentric is computed from its own edge function and accepted down to -kTie (far
+    // below a texel, far above rounding), then clamped; the first face in order wins.
+    constexpr double kTie = 1e-9;
     for (int y = y0; y <= y1; ++y) {
       const double cy = y + 0.5;
       for (int x = x0; x <= x1; ++x) {
         const double cx = x + 0.5;
-        // Edge functions, normalised by the signed area so they are the barycentrics.
         const double w0 = ((px[1] - cx) * (py[2] - cy) - (py[1] - cy) * (px[2] - cx)) / area;
         const double w1 = ((px[2] - cx) * (py[0] - cy) - (py[2] - cy) * (px[0] - cx)) / area;
-        const double w2 = 1.0 - w0 - w1;
-        if (w0 < 0 || w1 < 0 || w2 < 0) continue;
+        const double w2 = ((px[0] - cx) * (py[1] - cy) - (py[0] - cy) * (px[1] - cx)) / area;
+        if (w0 < -kTie || w1 < -kTie || w2 < -kTie) continue;
         TexelSample& s = out[static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x)];
         if (s.face >= 0) continue;  // first face in face order wins: deterministic
+        const double c0 = std::max(w0, 0.0), c1 = std::max(w1, 0.0), c2 = std::max(w2, 0.0), sum = c0 + c1 + c2;
         s.face = f.idx();
-        s.bary = {static_cast<float>(w0), static_cast<float>(w1), static_cast<float>(w2)};
+        s.bary = {static_cast<float>(c0 / sum), static_cast<float>(c1 / sum), static_cast<float>(c2 / sum)};
       }
     }
   }

@@ -98,6 +98,13 @@ void compute_angle_weighted_normals(Mesh& mesh) {
   }
 }
 
+bool is_uv_seam(const Mesh& mesh, Mesh::EdgeHandle e) {
+  if (!has_uvs(mesh) || mesh.is_boundary(e)) return false;
+  const HalfedgeHandle h0 = mesh.halfedge_handle(e, 0), h1 = mesh.halfedge_handle(e, 1);
+  // h0 points to the vertex h1 leaves: in h1's face that corner is prev(h1). Likewise for h1.
+  return !same_uv(mesh, h0, mesh.prev_halfedge_handle(h1)) || !same_uv(mesh, h1, mesh.prev_halfedge_handle(h0));
+}
+
 float uv_double_area(const Mesh& mesh, FaceHandle f) {
   const auto hs = face_halfedges(mesh, f);
   const Vec2f a = mesh.texcoord2D(hs[0]), b = mesh.texcoord2D(hs[1]), c = mesh.texcoord2D(hs[2]);

@@ -33,8 +33,8 @@ CornerSplit split_corners(const Mesh& mesh) {
   const bool uv = has_uvs(mesh);
   const auto tan = tangent_property(mesh);
   auto same = [&](HalfedgeHandle a, HalfedgeHandle b) {
-    if (uv && std::memcmp(&mesh.texcoord2D(a), &mesh.texcoord2D(b), sizeof(Vec2f)) != 0) return false;
-    if (tan.is_valid() && std::memcmp(&mesh.property(tan, a), &mesh.property(tan, b), sizeof(OpenMesh::Vec4f)) != 0)
+    if (uv && !same_uv(mesh, a, b)) return false;
+    if (tan.is_valid() && mesh.property(tan, a) != mesh.property(tan, b))
       return false;
     return true;
   };

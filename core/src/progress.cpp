@@ -27,7 +27,10 @@ void TerminalProgress::begin(const std::string& label, uint64_t total) {
   done_ = 0;
   start_ms_ = now_ms();
   last_draw_ms_ = 0;
-  if (enabled_) draw(false);
+  if (enabled_) {
+    open_ = true;
+    draw(false);
+  }
 }
 
 void TerminalProgress::advance(uint64_t units) {
@@ -44,6 +47,15 @@ void TerminalProgress::end() {
   if (!enabled_) return;
   done_ = total_;
   draw(true);
+  open_ = false;
+}
+
+void TerminalProgress::abandon() {
+  if (!enabled_ || !open_) return;
+  std::lock_guard<std::mutex> lock(draw_mutex());
+  std::fputs("\r\033[K", stderr);
+  std::fflush(stderr);
+  open_ = false;
 }
 
 void TerminalProgress::draw(bool final_draw) {

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <memory>
 
 namespace meso {
 
@@ -26,7 +27,9 @@ std::vector<T> quantize(const std::vector<float>& px, float max_value) {
 }
 }  // namespace
 
-Image read_image(const fs::path& path) {
+namespace {
+
+std::unique_ptr<OIIO::ImageInput> open_input(const fs::path& path) {
   const std::string name = path.string();
   if (!fs::exists(path)) throw InputError(name, "no such file");
   // meso's images carry straight (unassociated) alpha, as PNG stores it: ask OIIO not to
@@ -38,15 +41,19 @@ Image read_image(const fs::path& path) {
     std::string err = OIIO::geterror();
     if (err.empty()) err = "not an image file OpenImageIO can read";
     // OIIO messages can span lines; keep the first.
-    err = err.substr(0, err.find('\n'));
-    throw InputError(name, "cannot read image: " + err);
+    throw InputError(name, "cannot read image: " + err.substr(0, err.find('\n')));
   }
-  const OIIO::ImageSpec& spec = in->spec();
+  return in;
+}
+
+// Reads the MIP level the input is positioned at (its current spec).
+Image read_level(OIIO::ImageInput& in, const std::string& name, int level) {
+  const OIIO::ImageSpec& spec = in.spec();
   if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0 || spec.depth > 1)
     throw InputError(name, "unsupported image layout");
   Image img(spec.width, spec.height, spec.nchannels);
-  if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, img.pixels.data())) {
-    std::string err = in->geterror();
+  if (!in.read_image(0, level, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, img.pixels.data())) {
+    const std::string err = in.geterror();
     throw InputError(name, "cannot read image data: " + err.substr(0, err.find('\n')));
   }
   for (const auto& p : spec.extra_attribs) {
@@ -57,11 +64,23 @@ Image read_image(const fs::path& path) {
     else if (p.type() == OIIO::TypeDesc::INT) img.metadata[k] = p.get_int();
     else img.metadata[k] = p.get_string();
   }
-  in->close();
-  for (float v : img.pixels) {
-    if (!std::isfinite(v)) throw InputError(name, "image contains NaN or infinite samples");
+  for (size_t i = 0; i < img.pixels.size(); ++i) {
+    if (std::isfinite(img.pixels[i])) continue;
+    const size_t texel = i / static_cast<size_t>(img.channels);
+    throw InputError(name, std::string(std::isnan(img.pixels[i]) ? "NaN" : "infinite") + " sample at texel (" +
+                               std::to_string(texel % static_cast<size_t>(img.width)) + ", " +
+                               std::to_string(texel / static_cast<size_t>(img.width)) + ") channel " +
+                               std::to_string(i % static_cast<size_t>(img.channels)) +
+                               (level ? " of MIP level " + std::to_string(level) : std::string()));
   }
   return img;
+}
+
+}  // namespace
+
+Image read_image(const fs::path& path) {
+  auto in = open_input(path);
+  return read_level(*in, path.string(), 0);
 }
 
 namespace {
@@ -149,20 +168,9 @@ void write_image_levels(const std::vector<Image>& levels, const fs::path& path, 
 }
 
 std::vector<Image> read_image_levels(const fs::path& path) {
-  std::vector<Image> levels{read_image(path)};
-  const std::string name = path.string();
-  auto in = OIIO::ImageInput::open(name);
-  if (!in) throw InputError(name, "cannot read image");
-  for (int k = 1; in->seek_subimage(0, k); ++k) {
-    const OIIO::ImageSpec& spec = in->spec();
-    Image img(spec.width, spec.height, spec.nchannels);
-    if (!in->read_image(0, k, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, img.pixels.data()))
-      throw InputError(name, "cannot read MIP level " + std::to_string(k));
-    for (float v : img.pixels) {
-      if (!std::isfinite(v)) throw InputError(name, "MIP level " + std::to_string(k) + " contains NaN or infinite samples");
-    }
-    levels.push_back(std::move(img));
-  }
+  auto in = open_input(path);
+  std::vector<Image> levels{read_level(*in, path.string(), 0)};
+  for (int k = 1; in->seek_subimage(0, k); ++k) levels.push_back(read_level(*in, path.string(), k));
   return levels;
 }
 

@@ -349,6 +349,7 @@ void write_gltf(const Mesh& mesh, const fs::path& path, bool binary) {
     u32(0x004E4942);  // "BIN\0"
     out.write(reinterpret_cast<const char*>(buf.data()), static_cast<std::streamsize>(buf.size()));
   }
+  out.close();  // flush now: a full disk shows here, not after the file is committed
   if (!out) throw InternalError(path.string() + ": write failed");
 }
 

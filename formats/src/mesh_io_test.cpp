@@ -121,6 +121,24 @@ TEST(MeshIo, NanCoordinateIsAnInputError) {
   }
 }
 
+TEST(OutputSet, RemovesFoldersItCreatedWhenNotCommitted) {
+  test::TempDir dir;
+  {
+    OutputSet out;
+    out.write_text(dir / "a" / "b" / "report.json", "{}");
+    EXPECT_TRUE(std::filesystem::exists(dir / "a" / "b"));
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "a"));
+  EXPECT_TRUE(std::filesystem::exists(dir.path()));
+}
+
+TEST(OutputSet, AFolderIsNotAnOutputFile) {
+  test::TempDir dir;
+  std::filesystem::create_directories(dir / "taken.obj");
+  OutputSet out;
+  EXPECT_THROW(out.add(dir / "taken.obj"), UsageError);
+}
+
 TEST(OutputSet, LeavesNothingWithoutCommit) {
   test::TempDir dir;
   {

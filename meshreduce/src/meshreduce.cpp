@@ -28,6 +28,7 @@ class ProgressObserver : public OpenMesh::Decimater::Observer {
 Mesh reduce_mesh(const Mesh& input, const ReduceOptions& options, ReduceReport* report, Progress& progress) {
   const auto t0 = std::chrono::steady_clock::now();
   Mesh mesh = input;
+  mesh.garbage_collection();  // counts and face indices refer to live elements only
   ReduceReport rep;
   rep.input_vertices = mesh.n_vertices();
   rep.input_faces = mesh.n_faces();

@@ -10,6 +10,8 @@
 // postprocess_collapse() gives the halfedges that pointed to v0 the UV of v1 in their chart.
 #pragma once
 
+#include "meso/core/mesh.hpp"
+
 #include <OpenMesh/Tools/Decimater/ModBaseT.hh>
 
 #include <algorithm>
@@ -46,6 +48,10 @@ class ModChartGuardT : public OpenMesh::Decimater::ModBaseT<MeshT> {
         if (m.to_vertex_handle(h) != ci.v1) other = m.to_vertex_handle(h);
       }
       if (count != 2 || !other.is_valid()) return Base::ILLEGAL_COLLAPSE;  // a corner of the outline
+      // Both feature edges in one triangle (a sliver wedge): the collapse would glue the
+      // surviving halfedge of that triangle into the face across the other feature edge,
+      // carrying the wrong chart's UV. Never worth it.
+      if (other == ci.vl || other == ci.vr) return Base::ILLEGAL_COLLAPSE;
       if (distance_to_segment(m.point(ci.v0), m.point(other), m.point(ci.v1)) > pos_tol_)
         return Base::ILLEGAL_COLLAPSE;
       if (uv) {
@@ -92,15 +98,10 @@ class ModChartGuardT : public OpenMesh::Decimater::ModBaseT<MeshT> {
     Vec2 uv;
   };
 
-  // A seam edge: its two sides have different UVs at either end.
+  // A feature edge: on the boundary or a UV seam.
   bool is_feature_edge(typename MeshT::EdgeHandle e) {
     const MeshT& m = Base::mesh();
-    if (m.is_boundary(e)) return true;
-    if (!m.has_halfedge_texcoords2D()) return false;
-    const auto h0 = m.halfedge_handle(e, 0), h1 = m.halfedge_handle(e, 1);
-    // h0 points to v_b; in h1's face the corner at v_b is at prev(h1). Likewise for v_a.
-    return m.texcoord2D(h0) != m.texcoord2D(m.prev_halfedge_handle(h1)) ||
-           m.texcoord2D(h1) != m.texcoord2D(m.prev_halfedge_handle(h0));
+    return m.is_boundary(e) || is_uv_seam(m, e);
   }
   bool is_feature_vertex(typename MeshT::VertexHandle v) {
     const MeshT& m = Base::mesh();

@@ -31,11 +31,20 @@ float height_at(vec2 uv) { return texture(u_height, uv).r; }
 void main() {
   vec3 n = v_normal;
   vec3 t = v_tangent;
+  // Interpolated normals or tangents can cancel (opposite vertex normals across a fold):
+  // fall back to a frame from the triangle itself rather than normalise a zero vector.
+  vec3 face_n = normalize(cross(dFdx(v_position), dFdy(v_position)));
+  if (dot(n, n) < 1e-12) n = face_n;
+  vec3 nn = normalize(n);
+  vec3 t_perp = t - nn * dot(nn, t);
+  if (dot(t_perp, t_perp) < 1e-12) {
+    t_perp = abs(nn.x) < 0.9 ? cross(nn, vec3(1, 0, 0)) : cross(nn, vec3(0, 1, 0));
+    t = t_perp;
+  }
   vec3 b = v_sign * cross(n, t);
 
   // Orthonormal frame for the ray, scaled to UV units.
-  vec3 nn = normalize(n);
-  vec3 tn = normalize(t - nn * dot(nn, t));
+  vec3 tn = normalize(t_perp);
   vec3 bn = v_sign * cross(nn, tn);
   vec3 view = normalize(v_position - u_eye);  // from the eye toward the surface
   vec3 dir = vec3(dot(view, tn) / max(v_uv_scale.x, 1e-20), dot(view, bn) / max(v_uv_scale.y, 1e-20), dot(view, nn));
@@ -80,7 +89,8 @@ void main() {
   }
   // MikkTSpace decoding with the interpolated, unnormalised vectors (tangent_frame.hpp).
   vec3 m = texture(u_normal, uv).rgb * 2.0 - 1.0;
-  vec3 N = normalize(m.x * t + m.y * b + m.z * n);
+  vec3 N = m.x * t + m.y * b + m.z * n;
+  N = dot(N, N) > 1e-20 ? normalize(N) : nn;
   if (!gl_FrontFacing) N = -N;
   float diffuse = max(dot(N, u_light), 0.0);
   vec3 albedo = vec3(0.78, 0.74, 0.70);

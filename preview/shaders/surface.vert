@@ -13,7 +13,7 @@ uniform mat4 u_view_projection;
 out vec3 v_position;
 out vec3 v_normal;
 out vec3 v_tangent;
-flat out float v_sign;
+flat out float v_sign;  // from the first corner (glProvokingVertex), as the baker takes it
 out vec2 v_uv;
 out vec2 v_uv_scale;
 

@@ -220,6 +220,8 @@ void SurfaceRenderer::draw(const PreviewOptions& o, int width, int height) {
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
   glEnable(GL_DEPTH_TEST);
   glDisable(GL_CULL_FACE);
+  // The flat tangent sign comes from a triangle's first corner, the corner the baker uses.
+  glProvokingVertex(GL_FIRST_VERTEX_CONVENTION);
   glUseProgram(program_);
   glUniformMatrix4fv(glGetUniformLocation(program_, "u_view_projection"), 1, GL_FALSE, pose.view_projection.data());
   glUniform3f(glGetUniformLocation(program_, "u_eye"), pose.eye[0], pose.eye[1], pose.eye[2]);

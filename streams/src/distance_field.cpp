@@ -70,13 +70,20 @@ DistanceField build_distance_field(const HeightField& field, const DistanceField
 
   // Box heights: the maximum of the filtered surface over each texel footprint.
   const Image top = footprint_min_max(field);
-  // Grid of half-texel spacing: point (a, b) sits at (a/2, b/2) texels, a in [0, 2W], b in
-  // [0, 2H]. Its height is the tallest box it belongs to (a corner touches up to four).
-  const int gw = 2 * w + 1, gh = 2 * h + 1;
+  // A tiling map (Border::wrap) is surrounded by copies of itself: pad the domain by `pad`
+  // texels of wrapped boxes. No box farther than relief * W texels can be nearest, since every
+  // voxel is at most that far above the floor of its own box.
+  const int pad = field.border == Border::wrap ? static_cast<int>(std::ceil(static_cast<double>(o.relief) * w)) + 1 : 0;
+  const int we = w + 2 * pad, he = h + 2 * pad;
+  // Grid of half-texel spacing over the padded domain: point (a, b) sits at (a/2, b/2)
+  // texels from the padded corner. Its height is the tallest box it belongs to (a corner
+  // touches up to four).
+  const int gw = 2 * we + 1, gh = 2 * he + 1;
   std::vector<float> grid_top(static_cast<size_t>(gw) * static_cast<size_t>(gh), -1.0f);
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      const float m = top.at(x, y, 1);
+  for (int y = 0; y < he; ++y)
+    for (int x = 0; x < we; ++x) {
+      const int sx = ((x - pad) % w + w) % w, sy = ((y - pad) % h + h) % h;
+      const float m = top.at(sx, sy, 1);
       for (int b = 2 * y; b <= 2 * y + 2; ++b)
         for (int a = 2 * x; a <= 2 * x + 2; ++a) {
           float& g = grid_top[static_cast<size_t>(b) * static_cast<size_t>(gw) + static_cast<size_t>(a)];
@@ -106,7 +113,8 @@ DistanceField build_distance_field(const HeightField& field, const DistanceField
         }
         env.build(line.data(), gw, 1);
         LowerEnvelope::Cursor c;
-        for (size_t x = 0; x < W; ++x) inter[x * GH + b] = static_cast<float>(env.eval(line.data(), 1, 2.0 * x + 1, c));
+        for (size_t x = 0; x < W; ++x)
+          inter[x * GH + b] = static_cast<float>(env.eval(line.data(), 1, 2.0 * (static_cast<double>(x) + pad) + 1, c));
       }
       // Pass 2, along y on every texel-centre column; evaluated at b = 2y + 1.
       float* slice = df.distance.data() + static_cast<size_t>(k) * static_cast<size_t>(h) * W;
@@ -116,7 +124,8 @@ DistanceField build_distance_field(const HeightField& field, const DistanceField
         env.build(line.data(), gh, 1);
         LowerEnvelope::Cursor c;
         for (int y = 0; y < h; ++y)
-          slice[static_cast<size_t>(y) * W + x] = static_cast<float>(std::sqrt(env.eval(line.data(), 1, 2.0 * y + 1, c)) * to_u);
+          slice[static_cast<size_t>(y) * W + x] =
+              static_cast<float>(std::sqrt(env.eval(line.data(), 1, 2.0 * (y + pad) + 1, c)) * to_u);
       }
     }
   });

@@ -26,13 +26,17 @@ float brute_distance(const HeightField& f, const Image& top, const DistanceField
   const int w = f.height.width, h = f.height.height;
   const double px = vx + 0.5, py = vy + 0.5, pz = (vk + 0.5) / o.depth;
   double best = 1e300;
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      const double dx = std::max({0.0, x - px, px - (x + 1)});
-      const double dy = std::max({0.0, y - py, py - (y + 1)});
-      const double dz = std::max(0.0, pz - top.at(x, y, 1)) * o.relief * w;
-      best = std::min(best, dx * dx + dy * dy + dz * dz);
-    }
+  const int tiles = f.border == Border::wrap ? 2 : 0;  // neighbouring tiles of a periodic map
+  for (int ty = -tiles; ty <= tiles; ++ty)
+    for (int tx = -tiles; tx <= tiles; ++tx)
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+          const double bx = x + tx * w, by = y + ty * h;
+          const double dx = std::max({0.0, bx - px, px - (bx + 1)});
+          const double dy = std::max({0.0, by - py, py - (by + 1)});
+          const double dz = std::max(0.0, pz - top.at(x, y, 1)) * o.relief * w;
+          best = std::min(best, dx * dx + dy * dy + dz * dz);
+        }
   return static_cast<float>(std::sqrt(best) / w);
 }
 
@@ -60,7 +64,8 @@ TEST_P(SdfExact, MatchesBruteForce) {
 INSTANTIATE_TEST_SUITE_P(Maps, SdfExact,
                          ::testing::Values(SdfCase{9, 7, 8, 0.1f, Border::clamp}, SdfCase{16, 16, 5, 0.5f, Border::wrap},
                                            SdfCase{1, 6, 4, 0.2f, Border::clamp}, SdfCase{1, 1, 3, 0.1f, Border::clamp},
-                                           SdfCase{12, 3, 16, 0.05f, Border::clamp}));
+                                           SdfCase{12, 3, 16, 0.05f, Border::clamp}, SdfCase{5, 4, 6, 1.5f, Border::wrap},
+                                           SdfCase{1, 1, 4, 0.3f, Border::wrap}));
 
 TEST(Sdf, FlatMapIsTheHeightAboveIt) {
   const HeightField f = make_height_field(Image(8, 4, 1, 0.3f), Border::clamp);  // flat: all 0

@@ -17,12 +17,9 @@ std::vector<int> uv_charts(const Mesh& mesh, size_t* count) {
     return x;
   };
   for (auto e : mesh.edges()) {
-    if (mesh.is_boundary(e)) continue;
-    const auto h0 = mesh.halfedge_handle(e, 0), h1 = mesh.halfedge_handle(e, 1);
-    // Same UVs at both ends as seen from both faces: h0's to-vertex is h1's from-vertex.
-    if (mesh.texcoord2D(h0) != mesh.texcoord2D(mesh.prev_halfedge_handle(h1))) continue;
-    if (mesh.texcoord2D(h1) != mesh.texcoord2D(mesh.prev_halfedge_handle(h0))) continue;
-    const int a = find(mesh.face_handle(h0).idx()), b = find(mesh.face_handle(h1).idx());
+    if (mesh.is_boundary(e) || is_uv_seam(mesh, e)) continue;
+    const int a = find(mesh.face_handle(mesh.halfedge_handle(e, 0)).idx());
+    const int b = find(mesh.face_handle(mesh.halfedge_handle(e, 1)).idx());
     if (a != b) parent[static_cast<size_t>(std::max(a, b))] = std::min(a, b);
   }
   std::vector<int> chart(mesh.n_faces(), -1), label(mesh.n_faces(), -1);
@@ -74,13 +71,12 @@ UvCheckReport check_uv_mapping(const Mesh& mesh, const UvCheckOptions& o) {
     double px[3], py[3];
     for (int i = 0; i < 3; ++i) {
       const Vec2f t = mesh.texcoord2D(hs[static_cast<size_t>(i)]);
-      px[i] = static_cast<double>(t[0]) * o.size;
-      py[i] = (1.0 - static_cast<double>(t[1])) * o.size;  // image rows top first
+      px[i] = uv_to_pixel_x(t[0], o.size);
+      py[i] = uv_to_pixel_y(t[1], o.size);
     }
-    const int x0 = std::max(0, static_cast<int>(std::floor(std::min({px[0], px[1], px[2]}))));
-    const int x1 = std::min(o.size - 1, static_cast<int>(std::floor(std::max({px[0], px[1], px[2]}))));
-    const int y0 = std::max(0, static_cast<int>(std::floor(std::min({py[0], py[1], py[2]}))));
-    const int y1 = std::min(o.size - 1, static_cast<int>(std::floor(std::max({py[0], py[1], py[2]}))));
+    int x0, x1, y0, y1;
+    if (!texels_touching(std::min({px[0], px[1], px[2]}), std::max({px[0], px[1], px[2]}), o.size, x0, x1)) return;
+    if (!texels_touching(std::min({py[0], py[1], py[2]}), std::max({py[0], py[1], py[2]}), o.size, y0, y1)) return;
     for (int y = y0; y <= y1; ++y)
       for (int x = x0; x <= x1; ++x)
         if (triangle_overlaps_box(px, py, x, y, x + 1, y + 1)) fn(static_cast<size_t>(y) * static_cast<size_t>(o.size) + static_cast<size_t>(x));

@@ -69,6 +69,15 @@ TEST(UvCheck, ChartsSharingATexelOverlapAtThatResolutionOnly) {
   EXPECT_TRUE(check_uv_mapping(m, o).overlapping_faces.empty());
 }
 
+TEST(UvCheck, FarOutUvsAreReportedNotRasterised) {
+  Mesh m = test::make_grid(2, 1);
+  for (auto h : face_halfedges(m, FaceHandle(2))) m.set_texcoord2D(h, m.texcoord2D(h) * 1e9f);
+  UvCheckOptions o;
+  o.size = 16;
+  const UvCheckReport r = check_uv_mapping(m, o);
+  EXPECT_EQ(r.outside_faces, (std::vector<int>{2}));
+}
+
 TEST(UvCheck, ReportsDegenerateAndOutsideFaces) {
   Mesh m = test::make_grid(2, 1);
   for (auto h : face_halfedges(m, FaceHandle(1))) m.set_texcoord2D(h, Vec2f(0.2f, 0.2f));

@@ -9,6 +9,8 @@
 // into and read from the file header (EXR attributes, PNG text chunks).
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <map>
 #include <string>
@@ -47,5 +49,28 @@ struct Image {
 // UV of the centre of texel (x, y) in an image of size w x h (see the convention above).
 inline float texel_center_u(int x, int w) { return (static_cast<float>(x) + 0.5f) / static_cast<float>(w); }
 inline float texel_center_v(int y, int h) { return 1.0f - (static_cast<float>(y) + 0.5f) / static_cast<float>(h); }
+
+// Pixel coordinates of a UV (x right, y down; texel centres at +0.5).
+inline double uv_to_pixel_x(float u, int w) { return static_cast<double>(u) * w; }
+inline double uv_to_pixel_y(float v, int h) { return (1.0 - static_cast<double>(v)) * h; }
+
+// Texels 0..n-1 whose centres (i + 0.5) lie in [a, b] (pixel units): [lo, hi], or false if
+// none. Clamps in double before converting, so far-out coordinates are safe.
+inline bool texel_centres_in(double a, double b, int n, int& lo, int& hi) {
+  const double l = std::ceil(a - 0.5), r = std::floor(b - 0.5);
+  if (!(l <= r) || r < 0 || l > n - 1) return false;  // also false for NaN
+  lo = static_cast<int>(std::max(l, 0.0));
+  hi = static_cast<int>(std::min(r, static_cast<double>(n - 1)));
+  return true;
+}
+
+// Texels 0..n-1 whose squares [i, i+1] meet [a, b] (pixel units): [lo, hi], or false if none.
+inline bool texels_touching(double a, double b, int n, int& lo, int& hi) {
+  const double l = std::floor(a), r = std::floor(b);
+  if (!(l <= r) || r < 0 || l > n - 1) return false;  // also false for NaN
+  lo = static_cast<int>(std::max(l, 0.0));
+  hi = static_cast<int>(std::min(r, static_cast<double>(n - 1)));
+  return true;
+}
 
 }  // namespace meso

@@ -68,6 +68,15 @@ std::array<HalfedgeHandle, 3> face_halfedges(const Mesh& mesh, FaceHandle f);
 // Requests vertex normals if needed. Vertices without a valid face get (0,0,1).
 void compute_angle_weighted_normals(Mesh& mesh);
 
+// Whether two corners carry the same UV (value equality: +0 and -0 are the same).
+inline bool same_uv(const Mesh& mesh, HalfedgeHandle a, HalfedgeHandle b) {
+  return mesh.texcoord2D(a) == mesh.texcoord2D(b);
+}
+
+// A UV seam: an interior edge whose two faces give different UVs at either end. Boundary
+// edges are not seams (they have one side).
+bool is_uv_seam(const Mesh& mesh, Mesh::EdgeHandle e);
+
 // The UV-space signed double area of a face (positive for counter-clockwise UVs).
 float uv_double_area(const Mesh& mesh, FaceHandle f);
 

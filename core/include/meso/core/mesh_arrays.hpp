@@ -21,7 +21,7 @@ MeshArrays flatten(const Mesh& mesh);
 
 // Per-corner attributes (UVs, tangents) make one welded vertex into several GPU/file
 // vertices. split_corners() gives each group of corners at a vertex whose attributes are
-// bitwise equal one output vertex; output vertices are numbered in order of first use by
+// equal one output vertex; output vertices are numbered in order of first use by
 // faces in face order, so the result does not depend on halfedge numbering.
 struct CornerSplit {
   std::vector<uint32_t> triangles;          // 3 output vertex indices per face, face order

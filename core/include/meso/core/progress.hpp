@@ -36,6 +36,8 @@ class TerminalProgress final : public Progress {
   void begin(const std::string& label, uint64_t total) override;
   void advance(uint64_t units) override;
   void end() override;
+  // Erases a bar left unfinished by an error, so the error line stands alone.
+  void abandon();
 
  private:
   void draw(bool final_draw);
@@ -44,6 +46,7 @@ class TerminalProgress final : public Progress {
   uint64_t total_ = 0;
   std::atomic<uint64_t> done_{0};
   std::atomic<int64_t> last_draw_ms_{0};
+  bool open_ = false;  // a bar is on screen without its final newline
   int64_t start_ms_ = 0;
 };
 

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <filesystem>
+#include <string>
 #include <vector>
 
 namespace meso {
@@ -17,10 +18,16 @@ class OutputSet {
 
   // Registers `final_path` and returns the temporary path to write it to. The temporary
   // keeps the extension (image and mesh writers choose the format by it) and is hidden
-  // (".meso-tmp-<pid>-<name>"). Creates the parent folder if needed.
+  // (".meso-tmp-<pid>-<n>-<name>"). Creates missing parent folders, and removes them again
+  // if the set is never committed. Throws UsageError if `final_path` is an existing folder.
   std::filesystem::path add(const std::filesystem::path& final_path);
 
-  // Renames every temporary to its final name. Throws InternalError on failure.
+  // add() and write `text` to the temporary, checking that it reached the disk.
+  void write_text(const std::filesystem::path& final_path, const std::string& text);
+
+  // Renames every temporary to its final name. Every final path was checked by add(), so a
+  // failure here means the file system failed under us (InternalError); files renamed
+  // before it stay renamed.
   void commit();
 
  private:
@@ -28,6 +35,7 @@ class OutputSet {
     std::filesystem::path temp, final;
   };
   std::vector<Entry> entries_;
+  std::vector<std::filesystem::path> created_folders_;  // deepest last
   bool committed_ = false;
 };
 

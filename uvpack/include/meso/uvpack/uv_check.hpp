@@ -30,7 +30,8 @@ struct UvCheckReport {
 
 // Conservative rasterisation: a texel is touched by a face when the face's UV triangle and
 // the texel's square share interior points (bilinear filtering reads every such texel).
-// Face indices are 0-based in the mesh's face order (the input file's order). Requires UVs.
+// Face indices are 0-based in the mesh's face order (the input file's order). Requires UVs
+// and a compacted mesh (no deleted elements), as read_mesh() and reduce_mesh() return.
 UvCheckReport check_uv_mapping(const Mesh& mesh, const UvCheckOptions& options);
 
 // Charts: faces connected through edges whose two sides carry the same UVs. Returns a chart
