@@ -171,6 +171,16 @@ TEST_F(Skeleton, WholePipeline) {
   const Result frames = run("frames " + (d / "reduced.obj").string() + " -o " + (d / "framed.glb").string());
   ASSERT_EQ(frames.code, 0) << frames.err;
   EXPECT_EQ(read_mesh(d / "framed.glb").n_faces(), reduced.n_faces());
+  // The flat base surface: frames along +x, curvature zero.
+  const Result flat = run("frames " + (d / "base.obj").string() + " -o " + (d / "base.gltf").string() + " --json");
+  ASSERT_EQ(flat.code, 0) << flat.err;
+  const auto flat_report = nlohmann::json::parse(flat.out);
+  EXPECT_NEAR(flat_report["curvature"]["min"].get<double>(), 0.0, 1e-4);
+  EXPECT_NEAR(flat_report["curvature"]["max"].get<double>(), 0.0, 1e-4);
+  const auto gltf = nlohmann::json::parse(test::read_text(d / "base.gltf"));
+  const auto& attributes = gltf["meshes"][0]["primitives"][0]["attributes"];
+  for (const char* a : {"POSITION", "NORMAL", "TEXCOORD_0", "TANGENT", "_CURVATURE", "_PRINCIPAL_DIRECTION"})
+    EXPECT_TRUE(attributes.contains(a)) << a;
 
   const Result bake = run("bake --low " + (d / "reduced.obj").string() + " --high " + (d / "high.obj").string() + " -o " +
                        (d / "maps").string() + " --size 128x64");

@@ -51,14 +51,6 @@ double corner_angle(const Mesh& mesh, HalfedgeHandle h) {
   return std::acos(std::clamp(OpenMesh::dot(a, b) / (la * lb), -1.0, 1.0));
 }
 
-// Any unit vector perpendicular to n, chosen continuously enough (Frisvad / Duff et al.).
-Vec3d perpendicular(const Vec3d& n) {
-  const double s = n[2] >= 0 ? 1.0 : -1.0;
-  const double a = -1.0 / (s + n[2]);
-  const double b = n[0] * n[1] * a;
-  return Vec3d(1.0 + s * n[0] * n[0] * a, s * b, -s * n[0]);
-}
-
 }  // namespace
 
 std::vector<TangentFrame> compute_tangent_frames(const Mesh& mesh) {
@@ -99,7 +91,7 @@ std::vector<TangentFrame> compute_tangent_frames(const Mesh& mesh) {
       if (!(t.norm() > 1e-20)) {
         // No usable UV gradient here (degenerate UVs): any tangent in the plane, so the
         // frame stays orthonormal and finite; the decoded normal is then still n for (0,0,1).
-        t = perpendicular(n);
+        t = any_perpendicular(n);
       }
       t.normalize();
       fr.tangent = OpenMesh::vector_cast<Vec3f>(t);

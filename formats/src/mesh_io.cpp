@@ -279,7 +279,10 @@ void write_gltf(const Mesh& mesh, const fs::path& path, bool binary) {
   };
   constexpr int kArray = 34962, kElements = 34963, kFloat = 5126, kUint = 5125;
 
-  std::vector<float> pos(nv * 3), nrm(nv * 3), tex(nv * 2), tng(nv * 4);
+  OpenMesh::VPropHandleT<OpenMesh::Vec2f> curv;
+  OpenMesh::VPropHandleT<OpenMesh::Vec3f> pdir;
+  const bool has_curv = mesh.get_property_handle(curv, kCurvatureProperty) && mesh.get_property_handle(pdir, kPrincipalDirectionProperty);
+  std::vector<float> pos(nv * 3), nrm(nv * 3), tex(nv * 2), tng(nv * 4), cur(has_curv ? nv * 2 : 0), dir(has_curv ? nv * 3 : 0);
   Vec3f lo(0, 0, 0), hi(0, 0, 0);
   for (size_t i = 0; i < nv; ++i) {
     const VertexHandle v(static_cast<int>(split.vertex[i]));
@@ -301,6 +304,12 @@ void write_gltf(const Mesh& mesh, const fs::path& path, bool binary) {
       const auto t4 = mesh.property(tan, split.corner[i]);
       for (int k = 0; k < 4; ++k) tng[4 * i + static_cast<size_t>(k)] = t4[k];
     }
+    if (has_curv) {
+      const auto k2 = mesh.property(curv, v);
+      const auto d3 = mesh.property(pdir, v);
+      for (int k = 0; k < 2; ++k) cur[2 * i + static_cast<size_t>(k)] = k2[k];
+      for (int k = 0; k < 3; ++k) dir[3 * i + static_cast<size_t>(k)] = d3[k];
+    }
   }
   auto accessor = [&](size_t view, size_t count, const char* type, int ctype) {
     accessors.push_back({{"bufferView", view}, {"componentType", ctype}, {"count", count}, {"type", type}});
@@ -313,6 +322,11 @@ void write_gltf(const Mesh& mesh, const fs::path& path, bool binary) {
   attributes["NORMAL"] = accessor(add_view(nrm.data(), nrm.size() * 4, kArray), nv, "VEC3", kFloat);
   if (uv) attributes["TEXCOORD_0"] = accessor(add_view(tex.data(), tex.size() * 4, kArray), nv, "VEC2", kFloat);
   if (tan.is_valid()) attributes["TANGENT"] = accessor(add_view(tng.data(), tng.size() * 4, kArray), nv, "VEC4", kFloat);
+  if (has_curv) {
+    // Application-specific attributes start with an underscore (glTF 2.0, 3.7.2.1).
+    attributes["_CURVATURE"] = accessor(add_view(cur.data(), cur.size() * 4, kArray), nv, "VEC2", kFloat);
+    attributes["_PRINCIPAL_DIRECTION"] = accessor(add_view(dir.data(), dir.size() * 4, kArray), nv, "VEC3", kFloat);
+  }
   const size_t iidx =
       accessor(add_view(split.triangles.data(), split.triangles.size() * 4, kElements), split.triangles.size(), "SCALAR", kUint);
 

@@ -4,6 +4,7 @@
 #include "meso/core/mesh.hpp"
 
 #include <filesystem>
+#include <functional>
 #include <string>
 
 namespace meso::test {
@@ -33,5 +34,10 @@ Mesh make_seamed_cube();
 // A width x height grid in the z = 0 plane from (0,0) to (sx, sy), UV = (x / sx, y / sy),
 // with smooth normals (0,0,1).
 Mesh make_grid(int columns, int rows, float sx = 1.0f, float sy = 1.0f);
+
+// A (columns x rows)-quad grid mapped through surface(s, t), s, t in [0, 1], UV = (s, t).
+// With wrap_s (wrap_t) the last column (row) of vertices is the first one again (a closed
+// surface; UVs then have a seam there). Normals: angle-weighted.
+Mesh make_parametric(int columns, int rows, const std::function<Vec3f(double, double)>& surface, bool wrap_s, bool wrap_t);
 
 }  // namespace meso::test

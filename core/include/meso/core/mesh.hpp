@@ -77,6 +77,15 @@ inline bool same_uv(const Mesh& mesh, HalfedgeHandle a, HalfedgeHandle b) {
 // edges are not seams (they have one side).
 bool is_uv_seam(const Mesh& mesh, Mesh::EdgeHandle e);
 
+// A unit vector perpendicular to the unit vector n, continuous except across n.z = 0's sign
+// flip (Duff et al. 2017, "Building an Orthonormal Basis, Revisited").
+inline OpenMesh::Vec3d any_perpendicular(const OpenMesh::Vec3d& n) {
+  const double s = n[2] >= 0 ? 1.0 : -1.0;
+  const double a = -1.0 / (s + n[2]);
+  const double b = n[0] * n[1] * a;
+  return OpenMesh::Vec3d(1.0 + s * n[0] * n[0] * a, s * b, -s * n[0]);
+}
+
 // The UV-space signed double area of a face (positive for counter-clockwise UVs).
 float uv_double_area(const Mesh& mesh, FaceHandle f);
 

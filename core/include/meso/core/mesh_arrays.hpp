@@ -36,6 +36,11 @@ CornerSplit split_corners(const Mesh& mesh);
 // (tx, ty, tz, sign) with the MikkTSpace meaning, bitangent = sign * cross(normal, tangent).
 inline constexpr const char* kTangentProperty = "meso:tangent";
 bool has_tangents(const Mesh& mesh);
+
+// Vertex properties in which `meso frames` stores curvature: (k1, k2) as Vec2f and the unit
+// direction of k1 as Vec3f (see curvature.hpp in bake/).
+inline constexpr const char* kCurvatureProperty = "meso:curvature";
+inline constexpr const char* kPrincipalDirectionProperty = "meso:principal_direction";
 OpenMesh::HPropHandleT<OpenMesh::Vec4f> tangent_property(const Mesh& mesh);  // invalid if absent
 OpenMesh::HPropHandleT<OpenMesh::Vec4f> add_tangent_property(Mesh& mesh);
 

@@ -36,7 +36,8 @@ Mesh read_mesh(const std::filesystem::path& path, MeshReadReport* report = nullp
 
 // Writes by extension: .obj (per-corner UVs as `vt`, normals), .ply (binary; vertices split
 // at UV seams since PLY has per-vertex UVs only), .gltf / .glb (POSITION, NORMAL, TEXCOORD_0,
-// and TANGENT when the mesh has meso:tangent). Positions are written with full float
+// TANGENT when the mesh has meso:tangent, and _CURVATURE (k1, k2) with _PRINCIPAL_DIRECTION
+// (k1's direction) when it has meso:curvature). Positions are written with full float
 // precision so a round trip is exact. Throws UsageError for an unknown extension and
 // InternalError when the file cannot be written. Not atomic by itself: pass a path from
 // OutputSet::add().

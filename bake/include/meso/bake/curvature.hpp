@@ -1,0 +1,32 @@
+// Per-vertex principal curvatures of the base mesh from local quadric fits (survey section
+// 5.1, eq. 13): in the vertex's frame (normal n, tangent plane axes), the neighbours'
+// heights over the tangent plane are fitted by least squares with h = a u^2 + b u v + c v^2,
+// extended by linear terms d u + e v so that an imprecise vertex normal does not bias it.
+#pragma once
+
+#include "meso/core/mesh.hpp"
+
+#include <vector>
+
+namespace meso {
+
+struct VertexCurvature {
+  // Principal curvatures, k1 >= k2, in 1/object units. Positive where the surface bends away
+  // from its normal (convex with outward normals): a sphere of radius r has k1 = k2 = 1/r.
+  float k1 = 0, k2 = 0;
+  Vec3f d1{1, 0, 0}, d2{0, 1, 0};  // unit principal directions in object space, d1 x d2 = n
+  int rings = 0;                   // 1 or 2: the neighbourhood that determined the fit; 0 = none
+};
+
+// One per vertex. Uses the 1-ring when it has at least 6 neighbours and determines the fit
+// (the least-squares system is well conditioned), else the 2-ring; a vertex whose 2-ring
+// cannot determine it gets zero curvature and rings = 0. Needs vertex normals. Curvatures
+// are those of the fitted surface at the vertex (shape operator I^-1 II); directions lie
+// in its tangent plane.
+std::vector<VertexCurvature> fit_curvature(const Mesh& mesh);
+
+// Stores k1, k2 (vertex property meso:curvature, Vec2f) and d1 (meso:principal_direction,
+// Vec3f) on the mesh, for export (glTF _CURVATURE, _PRINCIPAL_DIRECTION).
+void store_curvature(Mesh& mesh, const std::vector<VertexCurvature>& curvature);
+
+}  // namespace meso

@@ -1,0 +1,106 @@
+#include "meso/bake/curvature.hpp"
+
+#include "test_support.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace meso {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// Outward-facing surfaces (counter-clockwise seen from outside) with known curvatures.
+Vec3f sphere(double r, double s, double t) {
+  const double th = kPi * (0.05 + 0.9 * t), ph = 2 * kPi * s;  // poles left out: open caps
+  return Vec3f(float(r * std::sin(th) * std::cos(ph)), float(r * std::sin(th) * std::sin(ph)), float(-r * std::cos(th)));
+}
+
+// Interior vertices only: boundary vertices have one-sided neighbourhoods.
+template <typename Fn>
+void for_interior(const Mesh& m, const std::vector<VertexCurvature>& c, Fn fn) {
+  for (auto v : m.vertices())
+    if (!m.is_boundary(v)) fn(v, c[static_cast<size_t>(v.idx())]);
+}
+
+TEST(Curvature, SphereHasOneOverRBothWays) {
+  const double r = 2.5;
+  const Mesh m = test::make_parametric(96, 48, [&](double s, double t) { return sphere(r, s, t); }, true, false);
+  const auto c = fit_curvature(m);
+  int n = 0;
+  for_interior(m, c, [&](VertexHandle, const VertexCurvature& k) {
+    EXPECT_NEAR(k.k1, 1 / r, 0.02 / r);
+    EXPECT_NEAR(k.k2, 1 / r, 0.02 / r);
+    EXPECT_EQ(k.rings, 1);
+    ++n;
+  });
+  EXPECT_GT(n, 1000);
+}
+
+TEST(Curvature, CylinderHasOneOverRAndZeroAlongTheAxis) {
+  const double r = 0.4;
+  const Mesh m = test::make_parametric(64, 20, [&](double s, double t) {
+    const double ph = 2 * kPi * s;
+    return Vec3f(float(r * std::cos(ph)), float(r * std::sin(ph)), float(2.0 * t));
+  }, true, false);
+  const auto c = fit_curvature(m);
+  for_interior(m, c, [&](VertexHandle, const VertexCurvature& k) {
+    EXPECT_NEAR(k.k1, 1 / r, 0.01 / r);
+    EXPECT_NEAR(k.k2, 0.0, 0.01 / r);
+    EXPECT_NEAR(std::abs(k.d2[2]), 1.0, 1e-3) << "the flat direction is the axis";
+  });
+}
+
+TEST(Curvature, TorusMatchesItsClosedForm) {
+  // Tube radius r around a circle of radius R: k_tube = 1/r, k_ring = cos(v) / (R + r cos(v)),
+  // where v = 0 on the outer equator.
+  const double R = 3.0, r = 1.0;
+  const Mesh m = test::make_parametric(160, 64, [&](double s, double t) {
+    const double u = 2 * kPi * s, v = 2 * kPi * t;
+    const double w = R + r * std::cos(v);
+    return Vec3f(float(w * std::cos(u)), float(w * std::sin(u)), float(r * std::sin(v)));
+  }, true, true);
+  // make_parametric winds counter-clockwise in (s, t); for this torus that faces inward, so
+  // the normals point into the tube: flip the expected signs.
+  const auto c = fit_curvature(m);
+  const double sign = OpenMesh::dot(m.normal(VertexHandle(0)), Vec3f(1, 0, 0)) > 0 ? 1.0 : -1.0;
+  for (auto vh : m.vertices()) {
+    const Vec3f p = m.point(vh);
+    const double v = std::atan2(p[2], std::hypot(p[0], p[1]) - R);
+    const double kt = sign / r, kr = sign * std::cos(v) / (R + r * std::cos(v));
+    const auto& k = c[static_cast<size_t>(vh.idx())];
+    EXPECT_NEAR(k.k1, std::max(kt, kr), 0.02) << "v = " << v;
+    EXPECT_NEAR(k.k2, std::min(kt, kr), 0.02) << "v = " << v;
+  }
+}
+
+TEST(Curvature, SaddleHasOppositeCurvatures) {
+  // z = (x^2 - y^2) / 2 has curvatures -1 and +1 at the origin (normal +z).
+  const int n = 40;
+  const Mesh m = test::make_parametric(n, n, [&](double s, double t) {
+    const double x = 0.2 * (2 * s - 1), y = 0.2 * (2 * t - 1);
+    return Vec3f(float(x), float(y), float(0.5 * (x * x - y * y)));
+  }, false, false);
+  const auto c = fit_curvature(m);
+  const VertexHandle centre((n / 2) * (n + 1) + n / 2);
+  ASSERT_EQ(m.point(centre), Vec3f(0, 0, 0));
+  const auto& k = c[static_cast<size_t>(centre.idx())];
+  EXPECT_NEAR(k.k1, 1.0, 0.01);
+  EXPECT_NEAR(k.k2, -1.0, 0.01);
+  EXPECT_NEAR(std::abs(k.d1[1]), 1.0, 1e-3) << "bending away from +z along y";
+}
+
+TEST(Curvature, TooFewNeighboursGiveNoFit) {
+  Mesh m;
+  const auto a = m.add_vertex(Vec3f(0, 0, 0)), b = m.add_vertex(Vec3f(1, 0, 0)), d = m.add_vertex(Vec3f(0, 1, 0));
+  m.add_face(a, b, d);
+  compute_angle_weighted_normals(m);
+  for (const auto& k : fit_curvature(m)) {
+    EXPECT_EQ(k.rings, 0);
+    EXPECT_EQ(k.k1, 0.0f);
+  }
+}
+
+}  // namespace
+}  // namespace meso
