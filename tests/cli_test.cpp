@@ -55,7 +55,7 @@ TEST(Cli, HelpVersionAndMethodList) {
   EXPECT_NE(version.out.find("meso "), std::string::npos);
   const Result methods = run("preview --list-methods");
   EXPECT_EQ(methods.code, 0);
-  EXPECT_EQ(methods.out, "bump\nparallax\npom\n");
+  EXPECT_EQ(methods.out, "bump\nparallax\noffset-limited\nslope\niterative-parallax\nsteep\nrelief\npom\nsphere-tracing\n");
 }
 
 TEST(Cli, BadUsageExitsTwo) {
@@ -222,6 +222,15 @@ TEST_F(Skeleton, WholePipeline) {
   size_t covered = 0;
   for (size_t i = 0; i < png.texel_count(); ++i) covered += png.pixels[4 * i + 3] > 0.5f;
   EXPECT_GT(covered, png.texel_count() / 10) << "the wall is in the frame";
+
+  const Result traced = run("preview " + (d / "reduced.obj").string() + " --maps " + (d / "maps").string() + " --streams " +
+                            d.path().string() + " --method sphere-tracing --headless --png " + (d / "traced.png").string() +
+                            " --size 48x32");
+  ASSERT_EQ(traced.code, 0) << traced.err;
+  const Result no_stream = run("preview " + (d / "reduced.obj").string() + " --maps " + (d / "maps").string() +
+                               " --method sphere-tracing --headless --png " + (d / "x.png").string());
+  EXPECT_EQ(no_stream.code, 3);
+  EXPECT_NE(no_stream.err.find("sdf.exr"), std::string::npos) << no_stream.err;
 
   const Result missing_maps = run("preview " + (d / "reduced.obj").string() + " --maps " + (d / "nowhere").string() +
                                " --headless --png " + (d / "x.png").string());

@@ -13,7 +13,7 @@ namespace meso::cli {
 
 void add_preview(CLI::App& app, Context& ctx) {
   struct Args {
-    std::string base, maps, png, size = "512x512", shade = "lit";
+    std::string base, maps, streams, png, size = "512x512", shade = "lit";
     PreviewOptions options;
     bool headless = false, list = false;
   };
@@ -21,7 +21,9 @@ void add_preview(CLI::App& app, Context& ctx) {
   CLI::App* sub = app.add_subcommand("preview", "Render the base mesh with its baked maps (window, or headless to PNG)");
   sub->add_option("base", args->base, "Base mesh with UVs");
   sub->add_option("--maps", args->maps, "Folder written by meso bake (displacement.exr, normal_ts.png)");
-  sub->add_option("--method", args->options.method, "Displacement method (see --list-methods)");
+  sub->add_option("--streams", args->streams, "Folder of meso streams outputs (sdf.exr for sphere-tracing); default: the --maps folder");
+  sub->add_option("--method", args->options.method, "Displacement method (see --list-methods)")
+      ->check(CLI::IsMember(preview_methods()));
   sub->add_flag("--list-methods", args->list, "Print the method names, one per line, and exit");
   sub->add_flag("--headless", args->headless, "Render off screen (EGL, no display needed) to --png");
   sub->add_option("--png", args->png, "Output image for --headless (RGBA PNG, 8 bit)");
@@ -51,8 +53,18 @@ void add_preview(CLI::App& app, Context& ctx) {
       const Mesh base = load_mesh(ctx.globals, args->base, base_report);
       if (!has_uvs(base)) throw InputError(args->base, "has no texture coordinates; the maps cannot be applied");
       const std::filesystem::path dir(args->maps);
-      PreviewMaps maps{read_image(dir / "displacement.exr"), read_image(dir / "normal_ts.png")};
+      PreviewMaps maps;
+      maps.displacement = read_image(dir / "displacement.exr");
+      maps.normal_ts = read_image(dir / "normal_ts.png");
       if (maps.normal_ts.channels < 3) throw InputError((dir / "normal_ts.png").string(), "needs 3 channels (a tangent-space normal map)");
+      // Streams: those the method needs must be there; in a window, any that are there are
+      // loaded so that every method can be switched to.
+      const std::filesystem::path sdf_file = std::filesystem::path(args->streams.empty() ? args->maps : args->streams) / "sdf.exr";
+      if (required_stream(o.method) == "sdf.exr" && !std::filesystem::exists(sdf_file))
+        throw InputError(sdf_file.string(), "missing: method " + o.method + " needs it (meso streams sdf " +
+                                                (dir / "displacement.exr").string() + " -o " + sdf_file.string() + ")");
+      if (required_stream(o.method) == "sdf.exr" || (!args->headless && std::filesystem::exists(sdf_file)))
+        maps.sdf = read_image(sdf_file);
       if (!args->headless) {
         run_window(base, maps, o);
         report = {{"command", "preview"}, {"method", o.method}};

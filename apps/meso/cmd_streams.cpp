@@ -31,14 +31,6 @@ HeightField load_height_field(const StreamArgs& a) {
   return make_height_field(read_image(a.input), a.wrap ? Border::wrap : Border::clamp);
 }
 
-ImageMetadata height_metadata(const HeightField& field, const std::string& quantity, const std::string& channels) {
-  return {{"quantity", quantity},
-          {"channels", channels},
-          {"height_scale", field.scale},
-          {"height_bias", field.bias},
-          {"height_units", std::string("normalised: object = bias + scale * value")},
-          {"border", std::string(border_name(field.border))}};
-}
 
 }  // namespace
 
@@ -53,8 +45,9 @@ void add_streams(CLI::App& app, Context& ctx) {
       const HeightField field = load_height_field(*args);
       const Image& height = field.height;
       MinMaxPyramid p = build_min_max_pyramid(field);
-      p.levels[0].metadata = height_metadata(field, "min-max pyramid",
-                                             "R = minimum, G = maximum of the bilinear height surface over each texel");
+      p.levels[0].metadata = height_field_metadata(field);
+      p.levels[0].metadata["quantity"] = std::string("min-max pyramid");
+      p.levels[0].metadata["channels"] = std::string("R = minimum, G = maximum of the bilinear height surface over each texel");
       OutputSet outputs;
       write_image_levels(p.levels, outputs.add(args->output), args->half ? PixelFormat::half : PixelFormat::float32);
       outputs.commit();
@@ -83,12 +76,7 @@ void add_streams(CLI::App& app, Context& ctx) {
     ctx.run = [&ctx, sdf_args, sdf_options](nlohmann::json& report, Progress&) {
       const HeightField field = load_height_field(*sdf_args);
       const DistanceField df = build_distance_field(field, *sdf_options);
-      Image img = distance_field_image(df);
-      img.metadata = height_metadata(field, "distance field",
-                                     "Y = distance from the voxel centre to the solid under the filtered height surface, units of u");
-      img.metadata["depth"] = df.depth;
-      img.metadata["relief"] = df.relief;
-      img.metadata["layout"] = std::string("slice k in rows [k H, (k+1) H), slice 0 lowest; voxel centre (x+0.5)/W, (y+0.5)/H, (k+0.5)/depth");
+      const Image img = distance_field_image(df, field);
       OutputSet outputs;
       write_image(img, outputs.add(sdf_args->output), sdf_args->half ? PixelFormat::half : PixelFormat::float32);
       outputs.commit();

@@ -1,8 +1,8 @@
 #version 450 core
-// Per-pixel displacement on the base mesh. Methods (survey, Szirmay-Kalos & Umenhoffer):
-//   0 bump      section 4.1.1: normal map only, the texture coordinate is not moved;
-//   1 parallax  section 4.1.2: (u',v') = (u,v) + h(u,v) (Vx/Vz, Vy/Vz);
-//   2 pom       section 4.4.2 with 4.3.1: linear search over the height slab, then one secant step.
+// Per-pixel displacement on the base mesh, the methods of the survey (Szirmay-Kalos &
+// Umenhoffer) by section: bump 4.1.1 (normal map only), parallax 4.1.2, offset-limited 4.1.3,
+// slope 4.1.4, iterative-parallax 4.2.1, steep 4.3.1, relief 4.4.1, pom 4.4.2,
+// sphere-tracing 4.3.4.
 // Heights are in object units along the base normal, positive outward (meso bake's
 // displacement.exr), in [u_h_min, u_h_max]. The ray is expressed in (u, v, h) coordinates:
 // per unit of object-space length it advances dot(V,t)/|dp/du| in u, dot(V,b)/|dp/dv| in v
@@ -23,10 +23,23 @@ uniform int u_iterations;
 uniform int u_shade;          // 0 lit, 1 uv of the visible point, 2 height of the visible point
 uniform float u_h_min;
 uniform float u_h_max;
+uniform sampler3D u_sdf;      // meso streams sdf: R = distance in units of u (bound when used)
+uniform float u_sdf_scale;    // object height = bias + scale * normalised height
+uniform float u_sdf_bias;
+uniform float u_sdf_relief;   // height range in units of u
+uniform float u_sdf_aspect;   // H / W of the height map
+uniform float u_sdf_epsilon;  // stop distance, units of u
+
+// Method numbers: the order of preview_methods() in renderer.cpp.
+const int kBump = 0, kParallax = 1, kOffsetLimited = 2, kSlope = 3, kIterativeParallax = 4, kSteep = 5,
+          kRelief = 6, kPom = 7, kSphereTracing = 8;
+const int kReliefBinarySteps = 8;
 
 layout(location = 0) out vec4 out_color;
 
-float height_at(vec2 uv) { return texture(u_height, uv).r; }
+// Explicit level of detail: loops have no implicit derivatives (divergent control flow).
+float height_at(vec2 uv) { return textureLod(u_height, uv, 0.0).r; }
+vec3 normal_ts_at(vec2 uv) { return textureLod(u_normal, uv, 0.0).rgb * 2.0 - 1.0; }
 
 void main() {
   vec3 n = v_normal;
@@ -49,34 +62,85 @@ void main() {
   vec3 view = normalize(v_position - u_eye);  // from the eye toward the surface
   vec3 dir = vec3(dot(view, tn) / max(v_uv_scale.x, 1e-20), dot(view, bn) / max(v_uv_scale.y, 1e-20), dot(view, nn));
 
+  // Unit view vector toward the viewer in the orthonormal tangent frame (the survey's V), and
+  // its advance per unit length in (u, v, h).
+  vec3 to_eye = -vec3(dot(view, tn), dot(view, bn), dot(view, nn));
+  vec3 to_eye_uvh = vec3(to_eye.xy / max(v_uv_scale, vec2(1e-20)), to_eye.z);
+
   vec2 uv = v_uv;
-  float h = 0.0;
-  if (u_method == 1 && dir.z < -1e-6) {
-    h = height_at(v_uv);
-    uv = v_uv + h * dir.xy / dir.z;
-  } else if (u_method == 2 && dir.z < -1e-6) {
-    // The ray crosses the slab from h = h_max (parameter s_in < 0, toward the eye) to
-    // h = h_min; s is object-space length along the view ray from the base surface point.
+  bool facing = dir.z < -1e-6;  // grazing or back-facing rays keep the base point
+  if (u_method == kParallax && facing) {
+    // Section 4.1.2: assume the height at (u, v) holds everywhere.
+    uv = v_uv + height_at(v_uv) * dir.xy / dir.z;
+  } else if (u_method == kOffsetLimited && facing) {
+    // Section 4.1.3: drop the division by V_z, so the offset never exceeds the height.
+    uv = v_uv + height_at(v_uv) * to_eye_uvh.xy;
+  } else if (u_method == kSlope && facing) {
+    // Section 4.1.4: the plane through (u, v, h) with the normal-map normal, offset-limited.
+    uv = v_uv + height_at(v_uv) * normal_ts_at(v_uv).z * to_eye_uvh.xy;
+  } else if (u_method == kIterativeParallax && facing) {
+    // Section 4.2.1: repeat the slope step from the point reached on the ray.
+    vec3 uvh = vec3(v_uv, 0.0);
+    for (int i = 0; i < max(u_iterations, 1); ++i) {
+      uvh += (height_at(uvh.xy) - uvh.z) * normal_ts_at(uvh.xy).z * to_eye_uvh;
+    }
+    uv = uvh.xy;
+  } else if ((u_method == kSteep || u_method == kRelief || u_method == kPom) && facing) {
+    // Section 4.3.1 linear search over the height slab from h = h_max (parameter s_in < 0,
+    // toward the eye) to h = h_min; s is object-space length along the view ray from the base
+    // point. Steep parallax stops at the first sample below the surface; relief mapping
+    // refines by binary search (4.4.1), POM by one secant step (4.4.2).
     float s_in = u_h_max / dir.z;
     float s_out = u_h_min / dir.z;
     int steps = max(u_iterations, 1);
     float s_prev = s_in;
     float d_prev = dir.z * s_in - height_at(v_uv + dir.xy * s_in);  // ray height minus surface height
     float s_hit = s_out;
-    for (int i = 1; i <= steps; ++i) {
-      float s = mix(s_in, s_out, float(i) / float(steps));
-      float d = dir.z * s - height_at(v_uv + dir.xy * s);
-      if (d <= 0.0) {
-        // Secant step between the last point above and the first point below the surface.
-        float w = d_prev / max(d_prev - d, 1e-20);
-        s_hit = mix(s_prev, s, clamp(w, 0.0, 1.0));
-        break;
+    if (d_prev <= 0.0) {
+      s_hit = s_in;
+    } else {
+      for (int i = 1; i <= steps; ++i) {
+        float s = mix(s_in, s_out, float(i) / float(steps));
+        float d = dir.z * s - height_at(v_uv + dir.xy * s);
+        if (d <= 0.0) {
+          if (u_method == kSteep) {
+            s_hit = s;
+          } else if (u_method == kPom) {
+            float w = d_prev / max(d_prev - d, 1e-20);
+            s_hit = mix(s_prev, s, clamp(w, 0.0, 1.0));
+          } else {
+            float above = s_prev, below = s;
+            for (int j = 0; j < kReliefBinarySteps; ++j) {
+              float mid = 0.5 * (above + below);
+              if (dir.z * mid - height_at(v_uv + dir.xy * mid) <= 0.0) below = mid;
+              else above = mid;
+            }
+            s_hit = 0.5 * (above + below);
+          }
+          break;
+        }
+        s_prev = s;
+        d_prev = d;
       }
-      s_prev = s;
-      d_prev = d;
     }
     uv = v_uv + dir.xy * s_hit;
-    h = dir.z * s_hit;
+  } else if (u_method == kSphereTracing && facing) {
+    // Section 4.3.4 on meso's distance field (streams/distance_field.hpp): in its space the
+    // point is (u, v H/W, normalised height * relief), distances in units of u. March from the
+    // top of the box by the stored distance until it vanishes.
+    float span = max(u_sdf_scale, 1e-20);
+    vec3 D = vec3(dir.x, dir.y * u_sdf_aspect, dir.z * u_sdf_relief / span);  // per unit s
+    float len = length(D);
+    float s = (u_sdf_bias + u_sdf_scale) / dir.z;  // where the ray enters the top (h = bias + scale)
+    for (int i = 0; i < max(u_iterations, 1); ++i) {
+      vec2 p = v_uv + dir.xy * s;
+      float z = (dir.z * s - u_sdf_bias) / span;  // normalised height
+      if (z < 0.0) break;
+      float dist = textureLod(u_sdf, vec3(p, clamp(z, 0.0, 1.0)), 0.0).r;
+      if (dist < u_sdf_epsilon) break;
+      s += dist / len;
+    }
+    uv = v_uv + dir.xy * s;
   }
 
   if (u_shade == 1) {
@@ -88,7 +152,7 @@ void main() {
     return;
   }
   // MikkTSpace decoding with the interpolated, unnormalised vectors (tangent_frame.hpp).
-  vec3 m = texture(u_normal, uv).rgb * 2.0 - 1.0;
+  vec3 m = normal_ts_at(uv);
   vec3 N = m.x * t + m.y * b + m.z * n;
   N = dot(N, N) > 1e-20 ? normalize(N) : nn;
   if (!gl_FrontFacing) N = -N;

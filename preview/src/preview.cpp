@@ -17,8 +17,15 @@ namespace meso {
 
 namespace {
 
-void check_maps(const PreviewMaps& maps) {
+void check_maps(const PreviewMaps& maps, const std::string& method) {
   if (maps.displacement.empty() || maps.normal_ts.empty()) throw std::logic_error("preview: maps are empty");
+  method_index(method);  // unknown method: UsageError before any OpenGL work
+  if (required_stream(method) == "sdf.exr" && maps.sdf.empty())
+    throw UsageError("method " + method + " needs the distance field sdf.exr (meso streams sdf, then --streams DIR)");
+}
+
+bool streams_available(const PreviewMaps& maps, const std::string& method) {
+  return required_stream(method).empty() || !maps.sdf.empty();
 }
 
 // An OpenGL 4.5 core context without any window system: EGL on Mesa's surfaceless platform
@@ -82,8 +89,7 @@ class OffscreenTarget {
 }  // namespace
 
 Image render_headless(const Mesh& base, const PreviewMaps& maps, const PreviewOptions& o) {
-  check_maps(maps);
-  method_index(o.method);  // unknown method: UsageError before any OpenGL work
+  check_maps(maps, o.method);
   EglContext context;
   if (epoxy_gl_version() < 45) throw InternalError("OpenGL 4.5 is not available (got " + std::to_string(epoxy_gl_version()) + ")");
   Image out(o.width, o.height, 4);
@@ -111,14 +117,14 @@ Image render_headless(const Mesh& base, const PreviewMaps& maps, const PreviewOp
 namespace {
 struct WindowState {
   PreviewOptions options;
+  const PreviewMaps* maps;
   bool dragging = false;
   double last_x = 0, last_y = 0;
 };
 }  // namespace
 
 void run_window(const Mesh& base, const PreviewMaps& maps, const PreviewOptions& initial) {
-  check_maps(maps);
-  method_index(initial.method);
+  check_maps(maps, initial.method);
   if (!glfwInit()) throw InternalError("no display for a preview window (use --headless --png FILE)");
   struct Terminate {
     ~Terminate() { glfwTerminate(); }
@@ -131,7 +137,7 @@ void run_window(const Mesh& base, const PreviewMaps& maps, const PreviewOptions&
   if (!window) throw InternalError("cannot open an OpenGL 4.5 window (use --headless --png FILE)");
   glfwMakeContextCurrent(window);
   glfwSwapInterval(1);
-  WindowState state{initial, false, 0, 0};
+  WindowState state{initial, &maps, false, 0, 0};
   glfwSetWindowUserPointer(window, &state);
   glfwSetMouseButtonCallback(window, [](GLFWwindow* w, int button, int action, int) {
     auto* s = static_cast<WindowState*>(glfwGetWindowUserPointer(w));
@@ -156,7 +162,9 @@ void run_window(const Mesh& base, const PreviewMaps& maps, const PreviewOptions&
     if (action == GLFW_RELEASE) return;
     auto* s = static_cast<WindowState*>(glfwGetWindowUserPointer(w));
     const auto& methods = preview_methods();
-    if (key >= GLFW_KEY_1 && key <= GLFW_KEY_9 && static_cast<size_t>(key - GLFW_KEY_1) < methods.size())
+    // 1-9 choose a method (those whose streams were not given are skipped).
+    if (key >= GLFW_KEY_1 && key <= GLFW_KEY_9 && static_cast<size_t>(key - GLFW_KEY_1) < methods.size() &&
+        streams_available(*s->maps, methods[static_cast<size_t>(key - GLFW_KEY_1)]))
       s->options.method = methods[static_cast<size_t>(key - GLFW_KEY_1)];
     if (key == GLFW_KEY_EQUAL || key == GLFW_KEY_KP_ADD) s->options.iterations = std::min(s->options.iterations * 2, 1024);
     if (key == GLFW_KEY_MINUS || key == GLFW_KEY_KP_SUBTRACT) s->options.iterations = std::max(s->options.iterations / 2, 1);

@@ -3,6 +3,7 @@
 #include "meso/preview/preview.hpp"
 
 #include "meso/core/error.hpp"
+#include "meso/streams/distance_field.hpp"
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -15,7 +16,9 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 
 PreviewMaps maps_with_height(float (*height)(float u)) {
-  PreviewMaps maps{Image(64, 64, 1), Image(4, 4, 3)};
+  PreviewMaps maps;
+  maps.displacement = Image(64, 64, 1);
+  maps.normal_ts = Image(4, 4, 3);
   for (int y = 0; y < 64; ++y)
     for (int x = 0; x < 64; ++x) maps.displacement.at(x, y) = height(texel_center_u(x, 64));
   for (size_t i = 0; i < maps.normal_ts.texel_count(); ++i) {
@@ -41,7 +44,7 @@ PreviewOptions centre_uv_options(const std::string& method, float view_angle) {
 TEST(Preview, ConstantHeightShiftsTheVisiblePointByHTanTheta) {
   const Mesh quad = test::make_grid(1, 1);
   const PreviewMaps maps = maps_with_height([](float) { return 0.05f; });
-  for (const char* method : {"parallax", "pom"}) {
+  for (const char* method : {"parallax", "iterative-parallax", "steep", "relief", "pom"}) {
     for (float angle : {0.0f, 30.0f, 60.0f}) {
       const Image img = render_headless(quad, maps, centre_uv_options(method, angle));
       const double expect_u = 0.5 + 0.05 * std::tan(angle * kPi / 180.0);
@@ -51,6 +54,47 @@ TEST(Preview, ConstantHeightShiftsTheVisiblePointByHTanTheta) {
   }
   const Image bump = render_headless(quad, maps, centre_uv_options("bump", 60.0f));
   EXPECT_NEAR(bump.at(32, 32, 0), 0.5, 1e-5) << "bump mapping does not move the texture coordinate";
+}
+
+// Offset limiting (and the slope variant on a flat normal map) drops the division by V_z:
+// the shift is h sin(theta), never more than h.
+TEST(Preview, OffsetLimitedShiftsByHSinTheta) {
+  const Mesh quad = test::make_grid(1, 1);
+  const PreviewMaps maps = maps_with_height([](float) { return 0.05f; });
+  for (const char* method : {"offset-limited", "slope"}) {
+    for (float angle : {0.0f, 45.0f, 80.0f}) {
+      const Image img = render_headless(quad, maps, centre_uv_options(method, angle));
+      EXPECT_NEAR(img.at(32, 32, 0), 0.5 + 0.05 * std::sin(angle * kPi / 180.0), 2e-4) << method << " at " << angle;
+    }
+  }
+}
+
+TEST(Preview, SafeAndRefiningMethodsFindTheCrossingOfALinearRamp) {
+  const Mesh quad = test::make_grid(1, 1);
+  PreviewMaps maps = maps_with_height([](float u) { return 0.1f * u; });
+  const HeightField field = make_height_field(maps.displacement, Border::clamp);
+  DistanceFieldOptions o;
+  o.depth = 32;
+  o.relief = 0.1f;
+  maps.sdf = distance_field_image(build_distance_field(field, o), field);
+  const double a = 50.0 * kPi / 180.0, k = 0.1;
+  const double dx = -std::sin(a), dz = -std::cos(a);
+  const double expect = 0.5 + dx * (0.5 * k / (dz - k * dx));
+  for (const auto& [method, tolerance] : {std::pair<const char*, double>{"relief", 2e-4}, {"pom", 2e-4}, {"sphere-tracing", 6e-3}}) {
+    PreviewOptions opt = centre_uv_options(method, 50.0f);
+    opt.iterations = 128;
+    const Image img = render_headless(quad, maps, opt);
+    EXPECT_NEAR(img.at(32, 32, 0), expect, tolerance) << method;
+    if (std::string(method) == "sphere-tracing") {
+      EXPECT_GE(img.at(32, 32, 0), expect - 1e-5) << "sphere tracing stops before the surface, never behind it";
+    }
+  }
+}
+
+TEST(Preview, MethodsNeedTheirStreams) {
+  const Mesh quad = test::make_grid(1, 1);
+  const PreviewMaps maps = maps_with_height([](float) { return 0.0f; });
+  EXPECT_THROW(render_headless(quad, maps, centre_uv_options("sphere-tracing", 30.0f)), UsageError);
 }
 
 TEST(Preview, PomFindsTheExactCrossingOfALinearRamp) {

@@ -17,9 +17,13 @@ extern const char* const surface_frag;
 }  // namespace shaders
 
 const std::vector<std::string>& preview_methods() {
-  static const std::vector<std::string> names{"bump", "parallax", "pom"};
+  // The order is the shader's method numbering (surface.frag).
+  static const std::vector<std::string> names{"bump",  "parallax", "offset-limited", "slope",         "iterative-parallax",
+                                              "steep", "relief",   "pom",            "sphere-tracing"};
   return names;
 }
+
+std::string required_stream(const std::string& method) { return method == "sphere-tracing" ? "sdf.exr" : ""; }
 
 int method_index(const std::string& name) {
   const auto& m = preview_methods();
@@ -193,6 +197,7 @@ SurfaceRenderer::SurfaceRenderer(const Mesh& base, const PreviewMaps& maps) : ba
                split.triangles.data(), GL_STATIC_DRAW);
   glBindVertexArray(0);
 
+  if (!maps.sdf.empty()) upload_sdf(maps.sdf, maps.displacement);
   height_tex_ = upload_texture(maps.displacement, 1);
   normal_tex_ = upload_texture(maps.normal_ts, 3);
   const auto& px = maps.displacement.pixels;
@@ -203,7 +208,45 @@ SurfaceRenderer::SurfaceRenderer(const Mesh& base, const PreviewMaps& maps) : ba
   }
 }
 
+void SurfaceRenderer::upload_sdf(const Image& sdf, const Image& displacement) {
+  auto number = [&](const char* key) -> float {
+    const auto it = sdf.metadata.find(key);
+    if (it == sdf.metadata.end()) throw InputError("sdf.exr", std::string("lacks the meso:") + key + " attribute of meso streams sdf");
+    if (const int* i = std::get_if<int>(&it->second)) return static_cast<float>(*i);
+    if (const float* f = std::get_if<float>(&it->second)) return *f;
+    throw InputError("sdf.exr", std::string("meso:") + key + " is not a number");
+  };
+  const int depth = static_cast<int>(number("depth"));
+  if (depth < 1 || sdf.height % depth != 0 || sdf.width != displacement.width || sdf.height / depth != displacement.height)
+    throw InputError("sdf.exr", "its size does not match displacement.exr (was it made from it?)");
+  sdf_relief_ = number("relief");
+  sdf_scale_ = number("height_scale");
+  sdf_bias_ = number("height_bias");
+  sdf_aspect_ = static_cast<float>(displacement.height) / static_cast<float>(displacement.width);
+  sdf_epsilon_ = 0.25f / static_cast<float>(displacement.width);  // a quarter texel, units of u
+  const auto border = sdf.metadata.find("border");
+  const bool wrap = border != sdf.metadata.end() && std::get_if<std::string>(&border->second) &&
+                    std::get<std::string>(border->second) == "wrap";
+  // Slices in rows [k H, (k+1) H) top row first; GL rows bottom first within each slice.
+  const int w = sdf.width, h = sdf.height / depth;
+  std::vector<float> voxels(sdf.pixels.size());
+  for (int k = 0; k < depth; ++k)
+    for (int y = 0; y < h; ++y)
+      std::copy_n(sdf.texel(0, k * h + y), w, &voxels[(static_cast<size_t>(k) * static_cast<size_t>(h) + static_cast<size_t>(h - 1 - y)) * static_cast<size_t>(w)]);
+  glGenTextures(1, &sdf_tex_);
+  glBindTexture(GL_TEXTURE_3D, sdf_tex_);
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  glTexImage3D(GL_TEXTURE_3D, 0, GL_R32F, w, h, depth, 0, GL_RED, GL_FLOAT, voxels.data());
+  glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  const GLint wrap_mode = wrap ? GL_REPEAT : GL_CLAMP_TO_EDGE;
+  glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_WRAP_S, wrap_mode);
+  glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_WRAP_T, wrap_mode);
+  glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_WRAP_R, GL_CLAMP_TO_EDGE);
+}
+
 SurfaceRenderer::~SurfaceRenderer() {
+  glDeleteTextures(1, &sdf_tex_);
   glDeleteTextures(1, &height_tex_);
   glDeleteTextures(1, &normal_tex_);
   glDeleteBuffers(1, &vbo_);
@@ -237,6 +280,16 @@ void SurfaceRenderer::draw(const PreviewOptions& o, int width, int height) {
   glActiveTexture(GL_TEXTURE1);
   glBindTexture(GL_TEXTURE_2D, normal_tex_);
   glUniform1i(glGetUniformLocation(program_, "u_normal"), 1);
+  if (!required_stream(o.method).empty() && !sdf_tex_)
+    throw UsageError("method " + o.method + " needs the stream " + required_stream(o.method) + " (meso streams)");
+  glActiveTexture(GL_TEXTURE2);
+  glBindTexture(GL_TEXTURE_3D, sdf_tex_);
+  glUniform1i(glGetUniformLocation(program_, "u_sdf"), 2);
+  glUniform1f(glGetUniformLocation(program_, "u_sdf_scale"), sdf_scale_);
+  glUniform1f(glGetUniformLocation(program_, "u_sdf_bias"), sdf_bias_);
+  glUniform1f(glGetUniformLocation(program_, "u_sdf_relief"), sdf_relief_);
+  glUniform1f(glGetUniformLocation(program_, "u_sdf_aspect"), sdf_aspect_);
+  glUniform1f(glGetUniformLocation(program_, "u_sdf_epsilon"), sdf_epsilon_);
   glBindVertexArray(vao_);
   glDrawElements(GL_TRIANGLES, index_count_, GL_UNSIGNED_INT, nullptr);
   glBindVertexArray(0);

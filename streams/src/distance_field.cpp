@@ -132,9 +132,16 @@ DistanceField build_distance_field(const HeightField& field, const DistanceField
   return df;
 }
 
-Image distance_field_image(const DistanceField& field) {
+Image distance_field_image(const DistanceField& field, const HeightField& source) {
   Image img(field.width, field.height * field.depth, 1);
   img.pixels = field.distance;
+  img.metadata = height_field_metadata(source);
+  img.metadata["quantity"] = std::string("distance field");
+  img.metadata["channels"] = std::string("Y = distance from the voxel centre to the solid under the filtered height surface, units of u");
+  img.metadata["depth"] = field.depth;
+  img.metadata["relief"] = field.relief;
+  img.metadata["layout"] =
+      std::string("slice k in rows [k H, (k+1) H), slice 0 lowest; voxel centre (x+0.5)/W, (y+0.5)/H, (k+0.5)/depth");
   return img;
 }
 

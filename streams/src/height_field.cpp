@@ -27,6 +27,13 @@ float HeightField::bilinear(double px, double py) const {
   return (a * (1 - tx) + b * tx) * (1 - ty) + (c * (1 - tx) + d * tx) * ty;
 }
 
+ImageMetadata height_field_metadata(const HeightField& field) {
+  return {{"height_scale", field.scale},
+          {"height_bias", field.bias},
+          {"height_units", std::string("normalised: object = bias + scale * value")},
+          {"border", std::string(border_name(field.border))}};
+}
+
 HeightField make_height_field(const Image& image, Border border) {
   HeightField hf;
   hf.border = border;

@@ -11,11 +11,16 @@
 namespace meso {
 
 // What `meso bake` wrote: displacement (1 channel, object units along the base normal,
-// positive outward) and the tangent-space normal map (3 channels, encoded n * 0.5 + 0.5).
+// positive outward) and the tangent-space normal map (3 channels, encoded n * 0.5 + 0.5);
+// and the streams the chosen method needs (`meso streams`), computed from that displacement.
 struct PreviewMaps {
   Image displacement;
   Image normal_ts;
+  Image sdf;  // sdf.exr as written (W x H*depth, metadata depth, relief, height_scale/bias, border)
 };
+
+// The stream file a method needs in --streams DIR ("sdf.exr"), or "" for none.
+std::string required_stream(const std::string& method);
 
 enum class PreviewShade {
   lit,     // Lambert shading with the mesostructure normal, sRGB-encoded

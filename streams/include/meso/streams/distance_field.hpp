@@ -38,8 +38,9 @@ struct DistanceField {
 
 DistanceField build_distance_field(const HeightField& field, const DistanceFieldOptions& options);
 
-// The field as one image: width W, height H * D, slice k in rows [k H, (k+1) H), slice 0 the
-// lowest. One channel.
-Image distance_field_image(const DistanceField& field);
+// The field as one image, as `meso streams sdf` writes it: width W, height H * D, slice k in
+// rows [k H, (k+1) H), slice 0 the lowest, one channel; metadata: the height field's
+// (height_field_metadata) plus depth, relief, quantity, channels, layout.
+Image distance_field_image(const DistanceField& field, const HeightField& source);
 
 }  // namespace meso

@@ -34,4 +34,8 @@ struct HeightField {
 // normalised heights are all 0).
 HeightField make_height_field(const Image& image, Border border);
 
+// The header attributes every stream file carries about its height field: height_scale,
+// height_bias, height_units, border (docs/formats.md).
+ImageMetadata height_field_metadata(const HeightField& field);
+
 }  // namespace meso
