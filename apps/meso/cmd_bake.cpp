@@ -21,9 +21,9 @@ void add_bake(CLI::App& app, Context& ctx) {
   sub->add_option("--high", args->high, "High-poly mesh")->required();
   sub->add_option("-o,--output", args->out_dir, "Output folder: displacement.exr, normal_ts.png")->required();
   sub->add_option("--size", args->size, "Map size: N or WxH texels");
-  sub->add_option("--front", args->front, "Ray reach outward from the base, object units (default 5% of the high mesh's bounding-box diagonal)")
+  sub->add_option("--front", args->front, "Ray reach outward from the base, object units (0: 5% of the high mesh's bounding-box diagonal)")
       ->check(CLI::NonNegativeNumber & Finite);
-  sub->add_option("--back", args->back, "Ray reach inward from the base, object units (same default)")->check(CLI::NonNegativeNumber & Finite);
+  sub->add_option("--back", args->back, "Ray reach inward from the base, object units (0: as for --front)")->check(CLI::NonNegativeNumber & Finite);
   sub->add_option("--dilate", args->dilate, "Texels to fill around charts (-1: the whole map)")->check(CLI::Range(-1, 1 << 20));
   sub->callback([&ctx, args] {
     ctx.run = [&ctx, args](nlohmann::json& report, Progress& progress) {

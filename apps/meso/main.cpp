@@ -78,9 +78,10 @@ int main(int argc, char** argv) {
   // Global options may also follow the subcommand (meso bake ... --json); subcommands added
   // below inherit this.
   app.fallthrough();
+  app.option_defaults()->always_capture_default();  // --help shows every default
   app.add_option("--threads", globals.threads, "Worker threads (0 = all cores); outputs do not depend on it")
       ->check(CLI::NonNegativeNumber);
-  app.add_flag("--quiet", globals.quiet, "No progress bar and no informational messages");
+  app.add_flag("--quiet", globals.quiet, "No progress bar, information or warnings (errors still print)");
   app.add_flag("--json", globals.json, "Print a machine-readable JSON report of what was done on stdout");
   cli::add_meshreduce(app, ctx);
   cli::add_uvpack(app, ctx);
