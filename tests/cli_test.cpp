@@ -147,6 +147,16 @@ TEST_F(Skeleton, BakeReproducesTheHeightFieldAndIsDeterministic) {
                      (d / "maps2").string() + " --size 128x64 --threads 2 --quiet");
   ASSERT_EQ(r2.code, 0) << r2.err;
   EXPECT_EQ(r2.err, "") << "--quiet";
+  EXPECT_EQ(read_image(d / "maps1" / "coverage.png").channels, 1);
+  // Rays that cannot reach the high surface: every covered texel misses, the check fails
+  // (exit 1) yet the maps are written, and the report names the faces.
+  const Result short_rays = run("bake --low " + (d / "base.obj").string() + " --high " + (d / "high.obj").string() + " -o " +
+                                (d / "maps3").string() + " --size 32x16 --front 1e-7 --back 1e-7 --max-miss-rate 0.5 --json");
+  EXPECT_EQ(short_rays.code, 1) << short_rays.err;
+  EXPECT_TRUE(std::filesystem::exists(d / "maps3" / "displacement.exr"));
+  const auto miss_report = nlohmann::json::parse(short_rays.out);
+  EXPECT_GT(miss_report["miss_rate"].get<double>(), 0.5);
+  EXPECT_FALSE(miss_report["miss_faces"].empty());
   for (const char* f : {"displacement.exr", "normal_ts.png"})
     EXPECT_EQ(test::read_text(d / "maps1" / f), test::read_text(d / "maps2" / f)) << f << " differs with the thread count";
 }

@@ -186,9 +186,16 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
   progress.end();
 
   bool first = true;
+  r.coverage = Image(o.width, o.height, 1, 0.0f);
+  r.face_texels.assign(low.n_faces(), 0);
+  r.face_misses.assign(low.n_faces(), 0);
   for (size_t i = 0; i < written.size(); ++i) {
     r.covered_texels += covered[i];
     if (!covered[i]) continue;
+    const size_t face = static_cast<size_t>(samples[i].face);
+    ++r.face_texels[face];
+    r.coverage.pixels[i] = written[i] ? 1.0f : 0.5f;
+    r.face_misses[face] += !written[i];
     if (written[i]) {
       ++r.hits;
       const float d = r.displacement.pixels[i];
@@ -213,6 +220,8 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
                              {"convention", std::string("signed distance along the base normal, positive outward")},
                              {"min", r.min_displacement},
                              {"max", r.max_displacement}};
+  r.coverage.metadata = {{"quantity", std::string("coverage")},
+                         {"values", std::string("1 = hit, 0.5 = miss (covered, nothing within reach), 0 = outside the charts")}};
   r.normal_ts.metadata = {{"quantity", std::string("normal")},
                           {"space", std::string("tangent (MikkTSpace, +y = +v)")}};
   return r;

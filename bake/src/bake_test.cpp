@@ -128,6 +128,13 @@ TEST(Bake, MissesAreCountedAndFilled) {
   const BakeResult r = bake(low, high, o);
   EXPECT_EQ(r.hits, 0u);
   EXPECT_EQ(r.misses, 64u);
+  uint32_t per_face = 0;
+  for (size_t f = 0; f < r.face_misses.size(); ++f) {
+    EXPECT_EQ(r.face_misses[f], r.face_texels[f]);
+    per_face += r.face_misses[f];
+  }
+  EXPECT_EQ(per_face, 64u);
+  for (float c : r.coverage.pixels) EXPECT_EQ(c, 0.5f);
   for (float d : r.displacement.pixels) EXPECT_EQ(d, 0.0f);
 }
 

@@ -91,6 +91,49 @@ TEST(Preview, SafeAndRefiningMethodsFindTheCrossingOfALinearRamp) {
   }
 }
 
+// Every method, straight on and at 89.9 degrees, on a rough height field over a curved base:
+// finite pixels only, and the mesh where it should be.
+TEST(Preview, EveryMethodIsStableStraightOnAndGrazing) {
+  const Mesh cylinder = test::make_parametric(32, 8, [](double s, double t) {
+    const double a = 1.2 * (s - 0.5);
+    return Vec3f(float(std::sin(a)), float(t), float(std::cos(a) - 1.0));
+  }, false, false);
+  PreviewMaps maps;
+  maps.displacement = Image(32, 32, 1);
+  maps.normal_ts = Image(32, 32, 3);
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 32; ++x) {
+      maps.displacement.at(x, y) = 0.05f * std::abs(std::sin(0.9f * x) * std::cos(1.3f * y));
+      const float nx = 0.4f * std::sin(0.3f * x), ny = 0.3f * std::cos(0.5f * y);
+      maps.normal_ts.at(x, y, 0) = nx * 0.5f + 0.5f;
+      maps.normal_ts.at(x, y, 1) = ny * 0.5f + 0.5f;
+      maps.normal_ts.at(x, y, 2) = std::sqrt(1 - nx * nx - ny * ny) * 0.5f + 0.5f;
+    }
+  const HeightField field = make_height_field(maps.displacement, Border::clamp);
+  maps.sdf = distance_field_image(build_distance_field(field, DistanceFieldOptions{}), field);
+  for (const auto& method : preview_methods()) {
+    for (float angle : {0.0f, 89.9f}) {
+      PreviewOptions o;
+      o.method = method;
+      o.width = 40;
+      o.height = 30;
+      o.camera.view_angle = angle;
+      for (PreviewShade shade : {PreviewShade::lit, PreviewShade::uv}) {
+        o.shade = shade;
+        const Image img = render_headless(cylinder, maps, o);
+        size_t covered = 0;
+        for (size_t i = 0; i < img.texel_count(); ++i) {
+          for (int c = 0; c < 4; ++c) ASSERT_TRUE(std::isfinite(img.pixels[4 * i + static_cast<size_t>(c)])) << method << " " << angle;
+          covered += img.pixels[4 * i + 3] > 0.5f;
+        }
+        if (angle == 0.0f) {
+          EXPECT_GT(covered, img.texel_count() / 4) << method;
+        }
+      }
+    }
+  }
+}
+
 TEST(Preview, MethodsNeedTheirStreams) {
   const Mesh quad = test::make_grid(1, 1);
   const PreviewMaps maps = maps_with_height([](float) { return 0.0f; });

@@ -29,8 +29,13 @@ struct BakeResult {
   // The high mesh's normal in the base's tangent space (tangent_frame.hpp), components in
   // [-1, 1], three channels; (0, 0, 1) where the surfaces are parallel.
   Image normal_ts;
+  // Where the rays found the high surface: 1 channel, 1 = hit, 0.5 = covered by a base face
+  // but no hit within reach (a miss), 0 = outside every chart.
+  Image coverage;
   size_t covered_texels = 0;  // texel centres inside some UV triangle
   size_t hits = 0, misses = 0;
+  // Per base face (face order): covered texels and misses, for the artist's report.
+  std::vector<uint32_t> face_texels, face_misses;
   float front = 0, back = 0;  // the reach actually used
   float min_displacement = 0, max_displacement = 0;  // over hits
 };
