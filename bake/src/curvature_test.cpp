@@ -32,7 +32,7 @@ TEST(Curvature, SphereHasOneOverRBothWays) {
   for_interior(m, c, [&](VertexHandle, const VertexCurvature& k) {
     EXPECT_NEAR(k.k1, 1 / r, 0.02 / r);
     EXPECT_NEAR(k.k2, 1 / r, 0.02 / r);
-    EXPECT_EQ(k.rings, 1);
+    EXPECT_GE(k.rings, 1);
     ++n;
   });
   EXPECT_GT(n, 1000);

@@ -18,8 +18,8 @@ struct VertexCurvature {
   int rings = 0;                   // 1 or 2: the neighbourhood that determined the fit; 0 = none
 };
 
-// One per vertex. Uses the 1-ring when it has at least 6 neighbours and determines the fit
-// (the least-squares system is well conditioned), else the 2-ring; a vertex whose 2-ring
+// One per vertex. Uses the 1-ring when it has at least 8 neighbours and determines the fit
+// well (singular values within a factor 100), else the 2-ring; a vertex whose 2-ring
 // cannot determine it gets zero curvature and rings = 0. Needs vertex normals. Curvatures
 // are those of the fitted surface at the vertex (shape operator I^-1 II); directions lie
 // in its tangent plane.
