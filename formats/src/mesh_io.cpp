@@ -5,6 +5,7 @@
 
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <assimp/Importer.hpp>
+#include <assimp/config.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
@@ -93,6 +94,9 @@ Mesh read_mesh(const fs::path& path, MeshReadReport* report) {
   if (!fs::exists(path)) throw InputError(name, "no such file");
   if (fs::is_directory(path)) throw InputError(name, "is a folder, not a mesh file");
   Assimp::Importer importer;
+  // Coordinates are the file's own: a COLLADA up_axis is not turned into a rotation, so a
+  // .dae base mesh and an .obj high mesh of one asset stay aligned.
+  importer.SetPropertyBool(AI_CONFIG_IMPORT_COLLADA_IGNORE_UP_DIRECTION, true);
   // Triangulate polygons in place; keep everything else as the file has it (no welding by
   // assimp, which would also merge corners we want to keep, no reordering).
   const aiScene* scene = importer.ReadFile(name, aiProcess_Triangulate | aiProcess_ValidateDataStructure);

@@ -182,6 +182,35 @@ TEST(MeshIo, FlattensNodeTransformsAndKeepsNames) {
   EXPECT_EQ(group_names(m)[0], "crate_high");
 }
 
+TEST(MeshIo, ReadsColladaInItsOwnCoordinates) {
+  test::TempDir dir;
+  // One triangle under a node translated by (0, 0, 5), in a Z_UP file.
+  test::write_text(dir / "tri.dae", R"(<?xml version="1.0" encoding="utf-8"?>
+<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
+  <asset><unit name="meter" meter="1"/><up_axis>Z_UP</up_axis></asset>
+  <library_geometries>
+    <geometry id="tri" name="tri_low"><mesh>
+      <source id="pos"><float_array id="pos-a" count="9">0 0 0 1 0 0 0 1 0</float_array>
+        <technique_common><accessor source="#pos-a" count="3" stride="3">
+          <param name="X" type="float"/><param name="Y" type="float"/><param name="Z" type="float"/>
+        </accessor></technique_common></source>
+      <vertices id="v"><input semantic="POSITION" source="#pos"/></vertices>
+      <triangles count="1"><input semantic="VERTEX" source="#v" offset="0"/><p>0 1 2</p></triangles>
+    </mesh></geometry>
+  </library_geometries>
+  <library_visual_scenes><visual_scene id="s">
+    <node id="n" name="n"><translate>0 0 5</translate><instance_geometry url="#tri"/></node>
+  </visual_scene></library_visual_scenes>
+  <scene><instance_visual_scene url="#s"/></scene>
+</COLLADA>
+)");
+  const Mesh m = read_mesh(dir / "tri.dae");
+  ASSERT_EQ(m.n_faces(), 1u);
+  const Box3 b = bounding_box(m);
+  EXPECT_EQ(b.lo, Vec3f(0, 0, 5));
+  EXPECT_EQ(b.hi, Vec3f(1, 1, 5));
+}
+
 TEST(MeshIo, ReadsOff) {
   test::TempDir dir;
   test::write_text(dir / "quad.off", "OFF\n4 1 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n");

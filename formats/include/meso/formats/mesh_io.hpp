@@ -23,6 +23,7 @@ struct MeshReadReport {
 };
 
 // Reads a mesh file into the pipeline's Mesh:
+//  - coordinates are the file's own (a COLLADA up_axis is not applied);
 //  - the node hierarchy is flattened with each node's transform; each input mesh/node
 //    becomes a face group named after the mesh (or else the node);
 //  - faces keep the file's order (each polygon triangulated in place);
