@@ -153,6 +153,55 @@ TEST(UvRaster, CentresOnSharedEdgesAreCovered) {
   }
 }
 
+TEST(UvRaster, ATriangleSmallerThanATexelStillGetsItsTexel) {
+  Mesh m = test::make_grid(1, 1);
+  // Face 0 shrunk into texel (0, 3) of a 4 x 4 map, clear of that texel's centre (0.5, 3.5).
+  const Vec2f corners[3] = {{0.1f, 0.1f}, {0.12f, 0.1f}, {0.12f, 0.12f}};
+  int k = 0;
+  for (auto h : face_halfedges(m, FaceHandle(0))) m.set_texcoord2D(h, corners[k++]);
+  const Vec2f far_corners[3] = {{0.9f, 0.9f}, {0.95f, 0.9f}, {0.95f, 0.95f}};  // face 1 out of the way
+  k = 0;
+  for (auto h : face_halfedges(m, FaceHandle(1))) m.set_texcoord2D(h, far_corners[k++]);
+  const auto samples = rasterize_uv(m, 4, 4);
+  const TexelSample& s = samples[3 * 4 + 0];
+  EXPECT_EQ(s.face, 0);
+  EXPECT_FALSE(s.centre_inside);
+  EXPECT_NEAR(s.bary[0] + s.bary[1] + s.bary[2], 1.0f, 1e-6f);
+}
+
+// A chart inset in the map: every texel its triangles touch is written, border texels at the
+// chart's point nearest their centre, so a bake over a plane is exact there too.
+TEST(Bake, BorderTexelsTakeTheNearestPointOfTheChart) {
+  Mesh low = test::make_grid(2, 2);
+  for (auto h : low.halfedges())
+    if (!low.is_boundary(h)) low.set_texcoord2D(h, low.texcoord2D(h) * 0.55f + Vec2f(0.2f, 0.17f));
+  const float a = 0.1f, b = -0.05f, c = 0.02f;
+  const Mesh high = make_plane(a, b, c);
+  BakeOptions o;
+  o.width = o.height = 16;
+  o.front = o.back = 0.5f;
+  o.dilate = 0;
+  const BakeResult r = bake(low, high, o);
+  const auto samples = rasterize_uv(low, 16, 16);
+  size_t border = 0;
+  for (int y = 0; y < 16; ++y)
+    for (int x = 0; x < 16; ++x) {
+      const TexelSample& s = samples[static_cast<size_t>(y) * 16 + static_cast<size_t>(x)];
+      if (s.face < 0) {
+        EXPECT_EQ(r.coverage.at(x, y), 0.0f);
+        continue;
+      }
+      border += !s.centre_inside;
+      ASSERT_EQ(r.coverage.at(x, y), 1.0f) << x << "," << y;
+      Vec3f p(0, 0, 0);
+      int k = 0;
+      for (auto h : face_halfedges(low, FaceHandle(s.face))) p += low.point(low.to_vertex_handle(h)) * s.bary[static_cast<size_t>(k++)];
+      ASSERT_NEAR(r.displacement.at(x, y), a * p[0] + b * p[1] + c, 2e-6f) << x << "," << y;
+    }
+  EXPECT_GE(border, 8u) << "the chart's bottom and top edges cut through texel rows";
+  EXPECT_EQ(r.misses, 0u);
+}
+
 TEST(UvRaster, FarOutUvsAreSafe) {
   Mesh m = test::make_grid(2, 1);
   for (auto h : face_halfedges(m, FaceHandle(0))) m.set_texcoord2D(h, m.texcoord2D(h) * 1e9f + Vec2f(2e9f, 0));

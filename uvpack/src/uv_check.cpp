@@ -1,5 +1,7 @@
 #include "meso/uvpack/uv_check.hpp"
 
+#include "meso/core/uv_texels.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <numeric>
@@ -33,31 +35,6 @@ std::vector<int> uv_charts(const Mesh& mesh, size_t* count) {
   return chart;
 }
 
-namespace {
-
-// Separating-axis test between a triangle and an axis-aligned box, both closed sets
-// shrunk to their interiors: true when they share interior points.
-bool triangle_overlaps_box(const double (&px)[3], const double (&py)[3], double x0, double y0, double x1, double y1) {
-  if (std::max({px[0], px[1], px[2]}) <= x0 || std::min({px[0], px[1], px[2]}) >= x1) return false;
-  if (std::max({py[0], py[1], py[2]}) <= y0 || std::min({py[0], py[1], py[2]}) >= y1) return false;
-  for (int i = 0; i < 3; ++i) {
-    const int j = (i + 1) % 3, k = (i + 2) % 3;
-    // Edge normal, oriented toward the third vertex.
-    double nx = py[j] - py[i], ny = px[i] - px[j];
-    const double side_k = nx * (px[k] - px[i]) + ny * (py[k] - py[i]);
-    if (side_k < 0) {
-      nx = -nx;
-      ny = -ny;
-    }
-    // The box's farthest corner along the normal must be strictly inside the edge's half-plane.
-    const double bx = nx > 0 ? x1 : x0, by = ny > 0 ? y1 : y0;
-    if (nx * (bx - px[i]) + ny * (by - py[i]) <= 0) return false;
-  }
-  return true;
-}
-
-}  // namespace
-
 UvCheckReport check_uv_mapping(const Mesh& mesh, const UvCheckOptions& o) {
   UvCheckReport r;
   r.width = r.height = o.size;
@@ -67,19 +44,9 @@ UvCheckReport check_uv_mapping(const Mesh& mesh, const UvCheckOptions& o) {
   std::vector<uint8_t> shared(n, 0);
 
   auto for_each_touched = [&](FaceHandle f, auto&& fn) {
-    const auto hs = face_halfedges(mesh, f);
-    double px[3], py[3];
-    for (int i = 0; i < 3; ++i) {
-      const Vec2f t = mesh.texcoord2D(hs[static_cast<size_t>(i)]);
-      px[i] = uv_to_pixel_x(t[0], o.size);
-      py[i] = uv_to_pixel_y(t[1], o.size);
-    }
-    int x0, x1, y0, y1;
-    if (!texels_touching(std::min({px[0], px[1], px[2]}), std::max({px[0], px[1], px[2]}), o.size, x0, x1)) return;
-    if (!texels_touching(std::min({py[0], py[1], py[2]}), std::max({py[0], py[1], py[2]}), o.size, y0, y1)) return;
-    for (int y = y0; y <= y1; ++y)
-      for (int x = x0; x <= x1; ++x)
-        if (triangle_overlaps_box(px, py, x, y, x + 1, y + 1)) fn(static_cast<size_t>(y) * static_cast<size_t>(o.size) + static_cast<size_t>(x));
+    for_each_touched_texel(uv_triangle_in_pixels(mesh, f, o.size, o.size), o.size, o.size, [&](int x, int y) {
+      fn(static_cast<size_t>(y) * static_cast<size_t>(o.size) + static_cast<size_t>(x));
+    });
   };
 
   for (auto f : mesh.faces()) {

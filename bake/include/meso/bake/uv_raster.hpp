@@ -11,13 +11,19 @@
 namespace meso {
 
 struct TexelSample {
-  int32_t face = -1;                   // -1: no triangle covers this texel centre
+  int32_t face = -1;                   // -1: no triangle touches this texel
   std::array<float, 3> bary{0, 0, 0};  // weights of the face's corners, face_halfedges() order
+  bool centre_inside = false;          // the texel centre lies in the face (else: border texel)
 };
 
-// For every texel of a width x height image, the first face (in face order) whose UV
-// triangle contains the texel centre, edges included, and the centre's barycentric
-// coordinates in it. Faces with zero UV area cover nothing. Row-major, top row first.
+// For every texel of a width x height image, the base-surface point it samples:
+//  1. the first face (in face order) whose UV triangle contains the texel centre, edges
+//     included, at the centre's barycentric coordinates;
+//  2. for a texel no centre test claimed but whose square some face touches (a chart's
+//     border, or a triangle smaller than a texel), the first such face, at its point
+//     nearest to the texel centre. So every texel bilinear filtering reads from a chart holds
+//     that chart's data, whatever the share of the texel the triangle covers.
+// Faces with zero UV area cover nothing. Row-major, top row first.
 std::vector<TexelSample> rasterize_uv(const Mesh& mesh, int width, int height);
 
 }  // namespace meso
