@@ -108,6 +108,26 @@ TEST(Cli, BadInputExitsThreeWithOneLineNamingTheFileAndNoOutput) {
   }
 }
 
+TEST(Cli, UvCheckFailsOnRequestOnly) {
+  test::TempDir dir;
+  // Two separate triangles in 3D mapped onto the same UV triangle.
+  test::write_text(dir / "twice.obj",
+                   "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 5 0 0\nv 6 0 0\nv 5 1 0\n"
+                   "vt 0.1 0.1\nvt 0.9 0.1\nvt 0.1 0.9\n"
+                   "f 1/1 2/2 3/3\nf 4/1 5/2 6/3\n");
+  const std::string report = (dir / "r.json").string();
+  const Result plain = run("uvpack check " + (dir / "twice.obj").string() + " --size 64 --report " + report);
+  EXPECT_EQ(plain.code, 0) << plain.err;
+  const auto j = nlohmann::json::parse(test::read_text(report));
+  EXPECT_EQ(j["overlapping_faces"], nlohmann::json({0, 1}));
+  EXPECT_EQ(j["overlap_pairs"], nlohmann::json({{0, 1}}));
+  EXPECT_EQ(j["charts"], 2);
+  const Result strict = run("uvpack check " + (dir / "twice.obj").string() + " --size 64 --fail-on flipped,overlap");
+  EXPECT_EQ(strict.code, 1);
+  EXPECT_EQ(run("uvpack check " + (dir / "twice.obj").string() + " --size 64 --fail-on flipped").code, 0);
+  EXPECT_EQ(run("uvpack check " + (dir / "twice.obj").string() + " --fail-on nonsense").code, 2);
+}
+
 class Skeleton : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 namespace meso {
 namespace {
 
@@ -35,6 +37,9 @@ TEST(UvCheck, FindsExactlyTheOverlappingCharts) {
   o.size = 64;
   const UvCheckReport r = check_uv_mapping(cube, o);
   EXPECT_EQ(r.overlapping_faces, (std::vector<int>{0, 1, 2, 3}));
+  // Which pairs, exactly: each moved triangle against the ones it lands on. Faces 0/2 are the
+  // same triangle of the side, as are 1/3; the diagonals cross, so 0/3 and 1/2 overlap too.
+  EXPECT_EQ(r.overlap_pairs, (std::vector<std::pair<int, int>>{{0, 2}, {0, 3}, {1, 2}, {1, 3}}));
   EXPECT_GT(r.texels_shared, 0u);
   // The overlay marks shared texels opaque red.
   size_t red = 0;
@@ -64,9 +69,20 @@ TEST(UvCheck, ChartsSharingATexelOverlapAtThatResolutionOnly) {
   ASSERT_EQ(charts, 2u);
   UvCheckOptions o;
   o.size = 16;
-  EXPECT_EQ(check_uv_mapping(m, o).overlapping_faces, (std::vector<int>{0, 1, 2, 3}));
+  const UvCheckReport low = check_uv_mapping(m, o);
+  EXPECT_EQ(low.shared_texel_faces, (std::vector<int>{0, 1, 2, 3}));
+  EXPECT_TRUE(low.overlapping_faces.empty()) << "apart, exactly";
   o.size = 64;
-  EXPECT_TRUE(check_uv_mapping(m, o).overlapping_faces.empty());
+  EXPECT_TRUE(check_uv_mapping(m, o).shared_texel_faces.empty());
+  // Padding is measured in texels at the checked size: 0.3 texels at 16^2, 1.2 at 64^2.
+  o.padding = 1.0;
+  EXPECT_TRUE(check_uv_mapping(m, o).padding_violations.empty());
+  o.padding = 2.0;
+  const UvCheckReport padded = check_uv_mapping(m, o);
+  ASSERT_EQ(padded.padding_violations.size(), 1u);
+  EXPECT_EQ(padded.padding_violations[0].chart_a, 0);
+  EXPECT_EQ(padded.padding_violations[0].chart_b, 1);
+  EXPECT_NEAR(padded.padding_violations[0].distance, 1.2, 1e-5);
 }
 
 TEST(UvCheck, FarOutUvsAreReportedNotRasterised) {
@@ -76,6 +92,46 @@ TEST(UvCheck, FarOutUvsAreReportedNotRasterised) {
   o.size = 16;
   const UvCheckReport r = check_uv_mapping(m, o);
   EXPECT_EQ(r.outside_faces, (std::vector<int>{2}));
+}
+
+TEST(UvCheck, TouchingChartsAndNeighboursInAChartAreNotOverlaps) {
+  // Two charts sharing an edge in UV space (but not in 3D), and the grid's own neighbours.
+  Mesh m = test::make_grid(2, 1);
+  for (int f = 2; f <= 3; ++f)
+    for (auto h : face_halfedges(m, FaceHandle(f))) m.set_texcoord2D(h, m.texcoord2D(h) + Vec2f(0.0f, 0.0f));
+  UvCheckOptions o;
+  o.size = 32;
+  EXPECT_TRUE(check_uv_mapping(m, o).overlap_pairs.empty());
+}
+
+TEST(UvCheck, FoldedFacesAreFlippedWithinTheirChart) {
+  // Drag the UV of the grid's centre vertex across its right-hand neighbours: the chart stays
+  // connected, and exactly the triangles whose UV winding reversed are flipped.
+  Mesh m = test::make_grid(2, 2);
+  const VertexHandle centre(4);
+  for (auto h : m.vih_range(centre))
+    if (!m.is_boundary(h)) m.set_texcoord2D(h, Vec2f(1.3f, 0.5f));
+  std::vector<int> reversed;
+  for (auto f : m.faces())
+    if (uv_double_area(m, f) < 0) reversed.push_back(f.idx());
+  ASSERT_FALSE(reversed.empty());
+  ASSERT_LT(reversed.size(), m.n_faces() / 2);
+  UvCheckOptions o;
+  o.size = 64;
+  const UvCheckReport r = check_uv_mapping(m, o);
+  EXPECT_EQ(r.charts, 1u);
+  EXPECT_EQ(r.flipped_faces, reversed);
+  EXPECT_FALSE(r.overlap_pairs.empty()) << "a fold overlaps its neighbours";
+}
+
+TEST(UvCheck, TexelDensityIsTexelsPerObjectUnit) {
+  const Mesh m = test::make_grid(3, 1, 3.0f, 1.0f);  // 3 square units on the whole UV square
+  UvCheckOptions o;
+  o.size = 300;
+  const UvCheckReport r = check_uv_mapping(m, o);
+  ASSERT_EQ(r.texel_density.size(), 1u);
+  EXPECT_NEAR(r.texel_density[0].texels_per_unit, std::sqrt(300.0 * 300.0 / 3.0), 1e-6);
+  EXPECT_TRUE(r.flipped_faces.empty());
 }
 
 TEST(UvCheck, ReportsDegenerateAndOutsideFaces) {

@@ -4,22 +4,40 @@
 
 #include "meso/core/image.hpp"
 #include "meso/core/mesh.hpp"
+#include "meso/uvpack/uv_overlaps.hpp"
 
 #include <cstddef>
+#include <utility>
 #include <vector>
 
 namespace meso {
 
 struct UvCheckOptions {
-  int size = 1024;  // texels per side of the square texture
+  int size = 1024;       // texels per side of the square texture
+  double padding = 0.0;  // texels charts must keep between them (0: no padding check)
+};
+
+// Texels per object-space unit of one chart: sqrt(UV area in texels^2 / surface area).
+struct ChartDensity {
+  int chart = 0;
+  double texels_per_unit = 0;
 };
 
 struct UvCheckReport {
   int width = 0, height = 0;
   size_t charts = 0;                   // UV-connected components (faces sharing UVs across an edge)
-  std::vector<int> overlapping_faces;  // faces touching a texel that another chart also touches; sorted
+  // Exact and resolution-independent: faces whose UV interiors overlap another face's
+  // (uv_overlaps.hpp), and the pairs. Sorted.
+  std::vector<int> overlapping_faces;
+  std::vector<std::pair<int, int>> overlap_pairs;
+  // At this resolution: faces touching a texel that another chart also touches (bilinear
+  // filtering would mix the charts there). Sorted.
+  std::vector<int> shared_texel_faces;
+  std::vector<int> flipped_faces;      // UV winding against the majority (by area) of their chart; sorted
   std::vector<int> degenerate_faces;   // zero UV area; sorted
   std::vector<int> outside_faces;      // a UV outside [0,1]; sorted
+  std::vector<ChartGap> padding_violations;  // chart pairs closer than options.padding texels
+  std::vector<ChartDensity> texel_density;   // per chart with surface area
   size_t texels_touched = 0;           // texels touched by at least one face
   size_t texels_shared = 0;            // texels touched by two or more charts
   double utilization = 0;              // texels_touched / all texels
