@@ -177,7 +177,7 @@ TEST_F(Skeleton, BakeReproducesTheHeightFieldAndIsDeterministic) {
   const auto miss_report = nlohmann::json::parse(short_rays.out);
   EXPECT_GT(miss_report["miss_rate"].get<double>(), 0.5);
   EXPECT_FALSE(miss_report["miss_faces"].empty());
-  for (const char* f : {"displacement.exr", "normal_ts.png"})
+  for (const char* f : {"displacement.exr", "normal_ts.png", "coverage.png"})
     EXPECT_EQ(test::read_text(d / "maps1" / f), test::read_text(d / "maps2" / f)) << f << " differs with the thread count";
 }
 
@@ -257,6 +257,19 @@ TEST_F(Skeleton, WholePipeline) {
                             d.path().string() + " --method sphere-tracing --headless --png " + (d / "traced.png").string() +
                             " --size 48x32");
   ASSERT_EQ(traced.code, 0) << traced.err;
+  // A distance field made from another height map is refused, naming the file.
+  Image ramp(128, 64, 1);
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 128; ++x) ramp.at(x, y) = 0.001f * static_cast<float>(x);
+  std::filesystem::create_directories(d / "stale");
+  write_image(ramp, d / "stale" / "ramp.exr", PixelFormat::float32);
+  const Result other = run("streams sdf " + (d / "stale" / "ramp.exr").string() + " -o " + (d / "stale" / "sdf.exr").string());
+  ASSERT_EQ(other.code, 0) << other.err;
+  const Result stale = run("preview " + (d / "reduced.obj").string() + " --maps " + (d / "maps").string() + " --streams " +
+                           (d / "stale").string() + " --method sphere-tracing --headless --png " + (d / "x.png").string());
+  EXPECT_EQ(stale.code, 3) << stale.err;
+  EXPECT_NE(stale.err.find((d / "stale" / "sdf.exr").string()), std::string::npos) << stale.err;
+
   const Result no_stream = run("preview " + (d / "reduced.obj").string() + " --maps " + (d / "maps").string() +
                                " --method sphere-tracing --headless --png " + (d / "x.png").string());
   EXPECT_EQ(no_stream.code, 3);

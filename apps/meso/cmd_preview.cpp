@@ -63,8 +63,17 @@ void add_preview(CLI::App& app, Context& ctx) {
       if (required_stream(o.method) == "sdf.exr" && !std::filesystem::exists(sdf_file))
         throw InputError(sdf_file.string(), "missing: method " + o.method + " needs it (meso streams sdf " +
                                                 (dir / "displacement.exr").string() + " -o " + sdf_file.string() + ")");
-      if (required_stream(o.method) == "sdf.exr" || (!args->headless && std::filesystem::exists(sdf_file)))
-        maps.sdf = read_image(sdf_file);
+      const bool needed = required_stream(o.method) == "sdf.exr";
+      if (needed || (!args->headless && std::filesystem::exists(sdf_file))) {
+        try {
+          maps.sdf = read_image(sdf_file);
+          check_sdf_matches(maps.sdf, maps.displacement, sdf_file.string());
+        } catch (const InputError& e) {
+          if (needed) throw;
+          warn(ctx.globals, std::string(e.what()) + " (sphere-tracing unavailable)");  // window only
+          maps.sdf = Image();
+        }
+      }
       if (!args->headless) {
         run_window(base, maps, o);
         report = {{"command", "preview"}, {"method", o.method}};

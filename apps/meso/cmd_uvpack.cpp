@@ -53,6 +53,7 @@ void add_uvpack(CLI::App& app, Context& ctx) {
       UvCheckOptions o;
       o.size = args->size;
       o.padding = args->padding;
+      o.overlay = !args->overlay.empty();
       const UvCheckReport r = check_uv_mapping(mesh, o);
       nlohmann::json gaps = nlohmann::json::array();
       for (const auto& g : r.padding_violations) gaps.push_back({{"charts", {g.chart_a, g.chart_b}}, {"distance", g.distance}});

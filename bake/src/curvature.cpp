@@ -104,10 +104,11 @@ std::vector<VertexCurvature> fit_curvature(const Mesh& mesh) {
     c.k1 = static_cast<float>(eig.eigenvalues()[1]);
     c.k2 = static_cast<float>(eig.eigenvalues()[0]);
     const Eigen::Vector2d e1 = Li.transpose() * eig.eigenvectors().col(1);
-    const Vec3d N = (n - t * du - b * dv).normalize();
-    const Vec3d d1 = ((t + n * du) * e1[0] + (b + n * dv) * e1[1]).normalize();
+    // The direction in the vertex normal's tangent plane (what the exported NORMAL and
+    // TANGENT span): the in-plane part of the fitted surface's direction.
+    const Vec3d d1 = (t * e1[0] + b * e1[1]).normalize();
     c.d1 = OpenMesh::vector_cast<Vec3f>(d1);
-    c.d2 = OpenMesh::vector_cast<Vec3f>(OpenMesh::cross(N, d1).normalize());
+    c.d2 = OpenMesh::vector_cast<Vec3f>(OpenMesh::cross(n, d1));
     c.rings = rings;
   }
   return out;

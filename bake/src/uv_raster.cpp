@@ -49,6 +49,8 @@ std::vector<TexelSample> rasterize_uv(const Mesh& mesh, int width, int height) {
   for (auto f : mesh.faces()) {
     if (uv_double_area(mesh, f) == 0.0f) continue;
     const UvTriangle t = uv_triangle_in_pixels(mesh, f, width, height);
+    const double area = (t.px[1] - t.px[0]) * (t.py[2] - t.py[0]) - (t.py[1] - t.py[0]) * (t.px[2] - t.px[0]);
+    if (!(std::abs(area) > 0)) continue;  // as in pass 1: no barycentrics without area
     for_each_touched_texel(t, width, height, [&](int x, int y) {
       TexelSample& s = at(x, y);
       if (s.face >= 0) return;

@@ -26,6 +26,10 @@ fs::path OutputSet::add(const fs::path& final_path) {
   std::error_code ec;
   if (fs::is_directory(final_path, ec)) throw UsageError(final_path.string() + ": is a folder, not an output file");
   const fs::path parent = final_path.has_parent_path() ? final_path.parent_path() : fs::path(".");
+  for (fs::path p = parent; !p.empty(); p = p.parent_path()) {
+    if (fs::exists(p, ec) && !fs::is_directory(p, ec)) throw UsageError(p.string() + ": is a file, not a folder");
+    if (p == p.parent_path()) break;
+  }
   // Remember which ancestors do not exist yet, outermost first, before creating them.
   std::vector<fs::path> missing;
   for (fs::path p = parent; !p.empty() && !fs::exists(p, ec); p = p.parent_path()) {

@@ -137,6 +137,9 @@ TEST(OutputSet, AFolderIsNotAnOutputFile) {
   std::filesystem::create_directories(dir / "taken.obj");
   OutputSet out;
   EXPECT_THROW(out.add(dir / "taken.obj"), UsageError);
+  // Nor is a file a folder to write into.
+  test::write_text(dir / "file", "x");
+  EXPECT_THROW(out.add(dir / "file" / "maps" / "displacement.exr"), UsageError);
 }
 
 TEST(OutputSet, LeavesNothingWithoutCommit) {

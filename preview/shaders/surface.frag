@@ -29,6 +29,7 @@ uniform float u_sdf_bias;
 uniform float u_sdf_relief;   // height range in units of u
 uniform float u_sdf_aspect;   // H / W of the height map
 uniform float u_sdf_epsilon;  // stop distance, units of u
+uniform float u_sdf_margin;   // one voxel diagonal, units of u
 
 // Method numbers: the order of preview_methods() in renderer.cpp.
 const int kBump = 0, kParallax = 1, kOffsetLimited = 2, kSlope = 3, kIterativeParallax = 4, kSteep = 5,
@@ -131,14 +132,30 @@ void main() {
     float span = max(u_sdf_scale, 1e-20);
     vec3 D = vec3(dir.x, dir.y * u_sdf_aspect, dir.z * u_sdf_relief / span);  // per unit s
     float len = length(D);
+    // Trilinear filtering blends the 8 voxel centres around a point, and the field is exact
+    // only at centres: with the 1-Lipschitz bound d(q) >= d(v) - |q - v| the blend can exceed
+    // the true distance by at most one voxel diagonal (u_sdf_margin), so that much is held back.
     float s = (u_sdf_bias + u_sdf_scale) / dir.z;  // where the ray enters the top (h = bias + scale)
     for (int i = 0; i < max(u_iterations, 1); ++i) {
       vec2 p = v_uv + dir.xy * s;
       float z = (dir.z * s - u_sdf_bias) / span;  // normalised height
       if (z < 0.0) break;
-      float dist = textureLod(u_sdf, vec3(p, clamp(z, 0.0, 1.0)), 0.0).r;
-      if (dist < u_sdf_epsilon) break;
-      s += dist / len;
+      float step = textureLod(u_sdf, vec3(p, clamp(z, 0.0, 1.0)), 0.0).r - u_sdf_margin;
+      if (step < u_sdf_epsilon) break;
+      s += step / len;
+    }
+    // Within a margin of the surface: finish as a combined method (section 4.4) with a short
+    // linear search at a quarter margin per step, then one secant step.
+    float ds = 0.25 * u_sdf_margin / len;
+    float d_prev = dir.z * s - height_at(v_uv + dir.xy * s);
+    for (int i = 0; i < 12 && d_prev > 0.0; ++i) {
+      float d = dir.z * (s + ds) - height_at(v_uv + dir.xy * (s + ds));
+      if (d <= 0.0) {
+        s += ds * clamp(d_prev / max(d_prev - d, 1e-20), 0.0, 1.0);
+        break;
+      }
+      s += ds;
+      d_prev = d;
     }
     uv = v_uv + dir.xy * s;
   }

@@ -23,6 +23,33 @@ const std::vector<std::string>& preview_methods() {
   return names;
 }
 
+namespace {
+float sdf_number(const Image& sdf, const char* key, const std::string& name) {
+  const auto it = sdf.metadata.find(key);
+  if (it == sdf.metadata.end()) throw InputError(name, std::string("lacks the meso:") + key + " attribute of meso streams sdf");
+  if (const int* i = std::get_if<int>(&it->second)) return static_cast<float>(*i);
+  if (const float* f = std::get_if<float>(&it->second)) return *f;
+  throw InputError(name, std::string("meso:") + key + " is not a number");
+}
+}  // namespace
+
+void check_sdf_matches(const Image& sdf, const Image& displacement, const std::string& name) {
+  const int depth = static_cast<int>(sdf_number(sdf, "depth", name));
+  if (depth < 1 || sdf.height % depth != 0 || sdf.width != displacement.width || sdf.height / depth != displacement.height)
+    throw InputError(name, "its size does not match displacement.exr (made from another height map?)");
+  // The height range it was normalised with must be the displacement's own.
+  float lo = displacement.pixels[0], hi = lo;
+  for (size_t i = 0; i < displacement.texel_count(); ++i) {
+    const float v = displacement.pixels[i * static_cast<size_t>(displacement.channels)];
+    lo = std::min(lo, v);
+    hi = std::max(hi, v);
+  }
+  const float bias = sdf_number(sdf, "height_bias", name), scale = sdf_number(sdf, "height_scale", name);
+  const float tol = 1e-6f * std::max({std::abs(lo), std::abs(hi), 1e-30f});
+  if (std::abs(bias - lo) > tol || std::abs(bias + scale - hi) > tol * 4)
+    throw InputError(name, "was made from another height map (its height range differs from displacement.exr's)");
+}
+
 std::string required_stream(const std::string& method) { return method == "sphere-tracing" ? "sdf.exr" : ""; }
 
 int method_index(const std::string& name) {
@@ -197,9 +224,9 @@ SurfaceRenderer::SurfaceRenderer(const Mesh& base, const PreviewMaps& maps) : ba
                split.triangles.data(), GL_STATIC_DRAW);
   glBindVertexArray(0);
 
-  if (!maps.sdf.empty()) upload_sdf(maps.sdf, maps.displacement);
   height_tex_ = upload_texture(maps.displacement, 1);
   normal_tex_ = upload_texture(maps.normal_ts, 3);
+  if (!maps.sdf.empty()) upload_sdf(maps.sdf, maps.displacement);
   const auto& px = maps.displacement.pixels;
   if (!px.empty()) {
     const auto [lo, hi] = std::minmax_element(px.begin(), px.end());
@@ -209,21 +236,18 @@ SurfaceRenderer::SurfaceRenderer(const Mesh& base, const PreviewMaps& maps) : ba
 }
 
 void SurfaceRenderer::upload_sdf(const Image& sdf, const Image& displacement) {
-  auto number = [&](const char* key) -> float {
-    const auto it = sdf.metadata.find(key);
-    if (it == sdf.metadata.end()) throw InputError("sdf.exr", std::string("lacks the meso:") + key + " attribute of meso streams sdf");
-    if (const int* i = std::get_if<int>(&it->second)) return static_cast<float>(*i);
-    if (const float* f = std::get_if<float>(&it->second)) return *f;
-    throw InputError("sdf.exr", std::string("meso:") + key + " is not a number");
-  };
+  check_sdf_matches(sdf, displacement, "sdf.exr");
+  auto number = [&](const char* key) { return sdf_number(sdf, key, "sdf.exr"); };
   const int depth = static_cast<int>(number("depth"));
-  if (depth < 1 || sdf.height % depth != 0 || sdf.width != displacement.width || sdf.height / depth != displacement.height)
-    throw InputError("sdf.exr", "its size does not match displacement.exr (was it made from it?)");
   sdf_relief_ = number("relief");
   sdf_scale_ = number("height_scale");
   sdf_bias_ = number("height_bias");
   sdf_aspect_ = static_cast<float>(displacement.height) / static_cast<float>(displacement.width);
   sdf_epsilon_ = 0.25f / static_cast<float>(displacement.width);  // a quarter texel, units of u
+  {
+    const double tx = 1.0 / displacement.width, tz = static_cast<double>(sdf_relief_) / depth;
+    sdf_margin_ = static_cast<float>(std::sqrt(2 * tx * tx + tz * tz));  // voxel diagonal, units of u
+  }
   const auto border = sdf.metadata.find("border");
   const bool wrap = border != sdf.metadata.end() && std::get_if<std::string>(&border->second) &&
                     std::get<std::string>(border->second) == "wrap";
@@ -240,6 +264,13 @@ void SurfaceRenderer::upload_sdf(const Image& sdf, const Image& displacement) {
   glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
   glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
   const GLint wrap_mode = wrap ? GL_REPEAT : GL_CLAMP_TO_EDGE;
+  // Streams and shaders agree on the border (height_field.hpp): a tiling field makes the
+  // height and normal maps tile too.
+  for (GLuint tex : {height_tex_, normal_tex_}) {
+    glBindTexture(GL_TEXTURE_2D, tex);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, wrap_mode);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, wrap_mode);
+  }
   glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_WRAP_S, wrap_mode);
   glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_WRAP_T, wrap_mode);
   glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_WRAP_R, GL_CLAMP_TO_EDGE);
@@ -290,6 +321,7 @@ void SurfaceRenderer::draw(const PreviewOptions& o, int width, int height) {
   glUniform1f(glGetUniformLocation(program_, "u_sdf_relief"), sdf_relief_);
   glUniform1f(glGetUniformLocation(program_, "u_sdf_aspect"), sdf_aspect_);
   glUniform1f(glGetUniformLocation(program_, "u_sdf_epsilon"), sdf_epsilon_);
+  glUniform1f(glGetUniformLocation(program_, "u_sdf_margin"), sdf_margin_);
   glBindVertexArray(vao_);
   glDrawElements(GL_TRIANGLES, index_count_, GL_UNSIGNED_INT, nullptr);
   glBindVertexArray(0);

@@ -73,8 +73,11 @@ DistanceField build_distance_field(const HeightField& field, const DistanceField
   // A tiling map (Border::wrap) is surrounded by copies of itself: pad the domain by `pad`
   // texels of wrapped boxes. No box farther than relief * W texels can be nearest, since every
   // voxel is at most that far above the floor of its own box.
-  const int pad = field.border == Border::wrap ? static_cast<int>(std::ceil(static_cast<double>(o.relief) * w)) + 1 : 0;
-  const int we = w + 2 * pad, he = h + 2 * pad;
+  // A nearer periodic copy of any box lies within half a period, which caps the padding.
+  const double reach = std::ceil(static_cast<double>(o.relief) * w) + 1;
+  const int pad_x = field.border == Border::wrap ? static_cast<int>(std::min(reach, w / 2.0 + 1)) : 0;
+  const int pad_y = field.border == Border::wrap ? static_cast<int>(std::min(reach, h / 2.0 + 1)) : 0;
+  const int we = w + 2 * pad_x, he = h + 2 * pad_y;
   // Grid of half-texel spacing over the padded domain: point (a, b) sits at (a/2, b/2)
   // texels from the padded corner. Its height is the tallest box it belongs to (a corner
   // touches up to four).
@@ -82,7 +85,7 @@ DistanceField build_distance_field(const HeightField& field, const DistanceField
   std::vector<float> grid_top(static_cast<size_t>(gw) * static_cast<size_t>(gh), -1.0f);
   for (int y = 0; y < he; ++y)
     for (int x = 0; x < we; ++x) {
-      const int sx = ((x - pad) % w + w) % w, sy = ((y - pad) % h + h) % h;
+      const int sx = ((x - pad_x) % w + w) % w, sy = ((y - pad_y) % h + h) % h;
       const float m = top.at(sx, sy, 1);
       for (int b = 2 * y; b <= 2 * y + 2; ++b)
         for (int a = 2 * x; a <= 2 * x + 2; ++a) {
@@ -114,7 +117,7 @@ DistanceField build_distance_field(const HeightField& field, const DistanceField
         env.build(line.data(), gw, 1);
         LowerEnvelope::Cursor c;
         for (size_t x = 0; x < W; ++x)
-          inter[x * GH + b] = static_cast<float>(env.eval(line.data(), 1, 2.0 * (static_cast<double>(x) + pad) + 1, c));
+          inter[x * GH + b] = static_cast<float>(env.eval(line.data(), 1, 2.0 * (static_cast<double>(x) + pad_x) + 1, c));
       }
       // Pass 2, along y on every texel-centre column; evaluated at b = 2y + 1.
       float* slice = df.distance.data() + static_cast<size_t>(k) * static_cast<size_t>(h) * W;
@@ -125,7 +128,7 @@ DistanceField build_distance_field(const HeightField& field, const DistanceField
         LowerEnvelope::Cursor c;
         for (int y = 0; y < h; ++y)
           slice[static_cast<size_t>(y) * W + x] =
-              static_cast<float>(std::sqrt(env.eval(line.data(), 1, 2.0 * (y + pad) + 1, c)) * to_u);
+              static_cast<float>(std::sqrt(env.eval(line.data(), 1, 2.0 * (y + pad_y) + 1, c)) * to_u);
       }
     }
   });

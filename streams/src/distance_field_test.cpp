@@ -88,6 +88,7 @@ TEST(Sdf, BallsAreEmptyAndTightAbovePeaks) {
   o.depth = 8;
   o.relief = 0.1f;
   const DistanceField df = build_distance_field(f, o);
+  const Image top = footprint_min_max(f);
   const int n = 16;
   std::vector<std::array<double, 3>> samples;
   double max_slope = 0;
@@ -109,6 +110,12 @@ TEST(Sdf, BallsAreEmptyAndTightAbovePeaks) {
           nearest = std::min(nearest, std::hypot(s[0] - c[0], s[1] - c[1], s[2] - c[2]));
         if (c[2] < f.bilinear(c[0], c[1]) * o.relief * w) nearest = 0;  // below the surface
         ASSERT_LE(df.at(x, y, k), nearest / w + tol) << x << "," << y << "," << k;
+        // Tight where the voxel is barely above its own box: every other box is at least half a
+        // texel away horizontally, so the gap to its own box's top is the distance.
+        const double gap = (c[2] - top.at(x, y, 1) * o.relief * w) / w;  // units of u
+        if (gap >= 0 && gap <= 0.5 / w) {
+          ASSERT_NEAR(df.at(x, y, k), gap, 1e-6) << x << "," << y << "," << k;
+        }
       }
 }
 
@@ -156,6 +163,9 @@ TEST(Sdf, SphereTracingNeverSkipsTheFirstHit) {
     }
     ASSERT_LE(t, t_ref + 1.0 / (64.0 * w)) << "ray " << ray << " stepped past the first hit";
   }
+  // Safety only: on white noise the boxes (footprint maxima) sit well above much of the
+  // surface, so tracers stop early by design; progress on smooth fields is checked by the
+  // previewer's ramp test (sphere tracing lands within 5e-4 of the crossing).
   EXPECT_GT(hits, 300);
 }
 

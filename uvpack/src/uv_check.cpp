@@ -51,17 +51,16 @@ UvCheckReport check_uv_mapping(const Mesh& mesh, const UvCheckOptions& o) {
   };
 
   for (auto f : mesh.faces()) {
-    const float area = uv_double_area(mesh, f);
-    if (area == 0.0f) {
-      r.degenerate_faces.push_back(f.idx());
-      continue;
-    }
     bool outside = false;
     for (auto h : face_halfedges(mesh, f)) {
       const Vec2f t = mesh.texcoord2D(h);
       outside |= t[0] < 0 || t[0] > 1 || t[1] < 0 || t[1] > 1;
     }
     if (outside) r.outside_faces.push_back(f.idx());
+    if (uv_double_area(mesh, f) == 0.0f) {
+      r.degenerate_faces.push_back(f.idx());
+      continue;
+    }
     const int c = chart[static_cast<size_t>(f.idx())];
     for_each_touched(f, [&](size_t i) {
       if (first_chart[i] < 0) first_chart[i] = c;
@@ -106,16 +105,19 @@ UvCheckReport check_uv_mapping(const Mesh& mesh, const UvCheckOptions& o) {
   for (size_t c = 0; c < r.charts; ++c) {
     if (surface_area[c] > 0) r.texel_density.push_back({static_cast<int>(c), std::sqrt(uv_area[c] / surface_area[c])});
   }
-  r.overlay = Image(o.size, o.size, 4, 0.0f);
+  if (o.overlay) r.overlay = Image(o.size, o.size, 4, 0.0f);
   for (size_t i = 0; i < n; ++i) {
+    r.texels_shared += shared[i];
+    r.texels_touched += first_chart[i] >= 0;
+    if (!o.overlay) continue;
     float* px = r.overlay.pixels.data() + 4 * i;
     if (shared[i]) {
-      px[0] = 1; px[3] = 1;
-      ++r.texels_shared;
+      px[0] = 1;
+      px[3] = 1;
     } else if (first_chart[i] >= 0) {
-      px[2] = 1; px[3] = 0.35f;
+      px[2] = 1;
+      px[3] = 0.35f;
     }
-    if (first_chart[i] >= 0) ++r.texels_touched;
   }
   r.utilization = n ? static_cast<double>(r.texels_touched) / static_cast<double>(n) : 0.0;
   return r;

@@ -92,16 +92,37 @@ TEST(UvCheck, FarOutUvsAreReportedNotRasterised) {
   o.size = 16;
   const UvCheckReport r = check_uv_mapping(m, o);
   EXPECT_EQ(r.outside_faces, (std::vector<int>{2}));
+  // Faces 0, 1 and 3 cover the left half and a quarter; face 2 is far away.
+  const UvCheckReport without = check_uv_mapping(test::make_grid(2, 1), o);
+  EXPECT_LT(r.texels_touched, without.texels_touched);
 }
 
 TEST(UvCheck, TouchingChartsAndNeighboursInAChartAreNotOverlaps) {
-  // Two charts sharing an edge in UV space (but not in 3D), and the grid's own neighbours.
+  // The grid's two cells stacked in UV space (the 3D edge between them becomes a seam), so
+  // that they touch along v = 0.51, which runs through the middle of texel row 15 at 32^2.
   Mesh m = test::make_grid(2, 1);
   for (int f = 2; f <= 3; ++f)
-    for (auto h : face_halfedges(m, FaceHandle(f))) m.set_texcoord2D(h, m.texcoord2D(h) + Vec2f(0.0f, 0.0f));
+    for (auto h : face_halfedges(m, FaceHandle(f))) {
+      Vec2f uv = m.texcoord2D(h);
+      uv[1] = 0.51f + uv[1] * 0.49f;  // right cell on the upper part
+      m.set_texcoord2D(h, uv);
+    }
+  for (int f = 0; f <= 1; ++f)
+    for (auto h : face_halfedges(m, FaceHandle(f))) {
+      Vec2f uv = m.texcoord2D(h);
+      uv[1] *= 0.51f;  // left cell on the lower part, under the right cell
+      uv[0] += 0.5f;
+      m.set_texcoord2D(h, uv);
+    }
+  size_t charts = 0;
+  uv_charts(m, &charts);
+  ASSERT_EQ(charts, 2u);
   UvCheckOptions o;
   o.size = 32;
-  EXPECT_TRUE(check_uv_mapping(m, o).overlap_pairs.empty());
+  const UvCheckReport r = check_uv_mapping(m, o);
+  EXPECT_TRUE(r.overlap_pairs.empty()) << "touching along an edge is not overlapping";
+  EXPECT_FALSE(r.shared_texel_faces.empty()) << "but at 32^2 they share the texels along the edge";
+  EXPECT_TRUE(r.flipped_faces.empty());
 }
 
 TEST(UvCheck, FoldedFacesAreFlippedWithinTheirChart) {

@@ -32,7 +32,7 @@ struct BakeResult {
   // Where the rays found the high surface: 1 channel, 1 = hit, 0.5 = covered by a base face
   // but no hit within reach (a miss), 0 = outside every chart.
   Image coverage;
-  size_t covered_texels = 0;  // texel centres inside some UV triangle
+  size_t covered_texels = 0;  // texels some UV triangle touches (rasterize_uv), misses included
   size_t hits = 0, misses = 0;
   // Per base face (face order): covered texels and misses, for the artist's report.
   std::vector<uint32_t> face_texels, face_misses;

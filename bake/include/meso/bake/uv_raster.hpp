@@ -21,8 +21,9 @@ struct TexelSample {
 //     included, at the centre's barycentric coordinates;
 //  2. for a texel no centre test claimed but whose square some face touches (a chart's
 //     border, or a triangle smaller than a texel), the first such face, at its point
-//     nearest to the texel centre. So every texel bilinear filtering reads from a chart holds
-//     that chart's data, whatever the share of the texel the triangle covers.
+//     nearest to the texel centre. So every texel a chart touches holds that chart's data,
+//     whatever the share of the texel the triangle covers; the ring beyond, which bilinear
+//     lookups at the chart's edge also read, is filled by dilation.
 // Faces with zero UV area cover nothing. Row-major, top row first.
 std::vector<TexelSample> rasterize_uv(const Mesh& mesh, int width, int height);
 

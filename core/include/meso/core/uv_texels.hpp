@@ -16,8 +16,9 @@ struct UvTriangle {
 
 UvTriangle uv_triangle_in_pixels(const Mesh& mesh, FaceHandle f, int width, int height);
 
-// Whether the triangle and texel (x, y) share interior points (bilinear filtering of that
-// texel reads the triangle's data). Separating-axis test; a degenerate triangle touches none.
+// Whether the triangle and texel (x, y) share interior points. Separating-axis test; a
+// degenerate triangle touches none. (Bilinear lookups inside the triangle also read the
+// ring of texels around the touched ones: see uv_check.hpp on padding.)
 bool triangle_overlaps_texel(const UvTriangle& t, int x, int y);
 
 // Calls fn(x, y) for every texel of a width x height grid the triangle touches, row by row.

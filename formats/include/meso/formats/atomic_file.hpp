@@ -22,7 +22,7 @@ class OutputSet {
   // if the set is never committed. Throws UsageError if `final_path` is an existing folder.
   std::filesystem::path add(const std::filesystem::path& final_path);
 
-  // add() and write `text` to the temporary, checking that it reached the disk.
+  // add() and write `text` to the temporary, checking that the write and close succeeded.
   void write_text(const std::filesystem::path& final_path, const std::string& text);
 
   // Renames every temporary to its final name. Every final path was checked by add(), so a

@@ -22,6 +22,10 @@ struct PreviewMaps {
 // The stream file a method needs in --streams DIR ("sdf.exr"), or "" for none.
 std::string required_stream(const std::string& method);
 
+// Throws InputError naming `name` unless `sdf` is meso streams sdf's output for exactly this
+// displacement map (its size and the height range it normalised).
+void check_sdf_matches(const Image& sdf, const Image& displacement, const std::string& name);
+
 enum class PreviewShade {
   lit,     // Lambert shading with the mesostructure normal, sRGB-encoded
   uv,      // R, G = UV of the visible point found by the method (for measurements)

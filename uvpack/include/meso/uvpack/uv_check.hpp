@@ -15,6 +15,7 @@ namespace meso {
 struct UvCheckOptions {
   int size = 1024;       // texels per side of the square texture
   double padding = 0.0;  // texels charts must keep between them (0: no padding check)
+  bool overlay = true;   // make the overlay image (size^2 RGBA floats)
 };
 
 // Texels per object-space unit of one chart: sqrt(UV area in texels^2 / surface area).
@@ -47,7 +48,9 @@ struct UvCheckReport {
 };
 
 // Conservative rasterisation: a texel is touched by a face when the face's UV triangle and
-// the texel's square share interior points (bilinear filtering reads every such texel).
+// the texel's square share interior points. Bilinear filtering of a chart also reads one
+// more ring of texels around those, so charts that must not mix under filtering need
+// --padding of at least 1 texel (2 with the bake's dilation), which the padding check verifies.
 // Face indices are 0-based in the mesh's face order (the input file's order). Requires UVs
 // and a compacted mesh (no deleted elements), as read_mesh() and reduce_mesh() return.
 UvCheckReport check_uv_mapping(const Mesh& mesh, const UvCheckOptions& options);
