@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <random>
 
 namespace meso {
 namespace {
@@ -208,6 +209,36 @@ TEST(UvRaster, FarOutUvsAreSafe) {
   for (auto h : face_halfedges(m, FaceHandle(1))) m.set_texcoord2D(h, m.texcoord2D(h) - Vec2f(3e9f, 3e9f));
   const auto samples = rasterize_uv(m, 16, 16);
   for (const auto& s : samples) EXPECT_TRUE(s.face != 0 && s.face != 1);
+}
+
+// Against brute force on random masks: every filled texel takes a written texel at the least
+// Euclidean distance, and nothing beyond the radius is filled.
+TEST(Dilate, SourcesAreExactlyNearestInTheEuclideanMetric) {
+  std::mt19937 rng(17);
+  for (int trial = 0; trial < 6; ++trial) {
+    const int w = 5 + trial * 7, h = 3 + trial * 5;
+    std::vector<uint8_t> written(static_cast<size_t>(w * h), 0);
+    std::bernoulli_distribution on(trial == 5 ? 0.002 : 0.08);
+    for (auto& b : written) b = on(rng);
+    const int radius = trial % 2 ? 3 : -1;
+    const auto src = dilation_sources(written, w, h, radius);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        double best = 1e300;
+        for (int yy = 0; yy < h; ++yy)
+          for (int xx = 0; xx < w; ++xx)
+            if (written[static_cast<size_t>(yy * w + xx)]) best = std::min(best, double((x - xx) * (x - xx) + (y - yy) * (y - yy)));
+        const int32_t s = src[static_cast<size_t>(y * w + x)];
+        if (best >= 1e300 || (radius >= 0 && best > radius * radius)) {
+          ASSERT_EQ(s, -1) << x << "," << y;
+          continue;
+        }
+        ASSERT_GE(s, 0) << x << "," << y;
+        ASSERT_TRUE(written[static_cast<size_t>(s)]);
+        const int sx = s % w, sy = s / w;
+        ASSERT_EQ(double((x - sx) * (x - sx) + (y - sy) * (y - sy)), best) << x << "," << y;
+      }
+  }
 }
 
 TEST(Dilate, CopiesTheNearestWrittenTexelUpToTheRadius) {

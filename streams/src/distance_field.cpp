@@ -1,5 +1,6 @@
 #include "meso/streams/distance_field.hpp"
 
+#include "meso/core/lower_envelope.hpp"
 #include "meso/streams/pyramid.hpp"
 
 #include <tbb/blocked_range.h>
@@ -7,57 +8,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 
 namespace meso {
-
-namespace {
-
-constexpr double kInf = std::numeric_limits<double>::infinity();
-
-// One-dimensional squared distance transform (Felzenszwalb & Huttenlocher 2012, "Distance
-// Transforms of Sampled Functions", algorithm DT(f)): the lower envelope of the parabolas
-// (q - p)^2 + f(p) rooted at samples p = 0..n-1, evaluated at any positions q. f is finite.
-struct LowerEnvelope {
-  std::vector<int> v;      // roots of the parabolas on the envelope, left to right
-  std::vector<double> z;   // z[j], z[j+1]: where parabola v[j] is lowest
-  int k = 0;               // index of the last parabola on the envelope
-
-  void build(const double* f, int n, int stride) {
-    v.resize(static_cast<size_t>(n));
-    z.resize(static_cast<size_t>(n) + 1);
-    auto at = [&](int p) { return f[static_cast<size_t>(p) * static_cast<size_t>(stride)] + double(p) * p; };
-    k = 0;
-    v[0] = 0;
-    z[0] = -kInf;
-    z[1] = kInf;
-    for (int q = 1; q < n; ++q) {
-      // Intersection with the last parabola; pop parabolas the new one hides entirely.
-      // z[0] = -inf ends the loop at k = 0.
-      double s = (at(q) - at(v[static_cast<size_t>(k)])) / (2.0 * (q - v[static_cast<size_t>(k)]));
-      while (s <= z[static_cast<size_t>(k)]) {
-        --k;
-        s = (at(q) - at(v[static_cast<size_t>(k)])) / (2.0 * (q - v[static_cast<size_t>(k)]));
-      }
-      ++k;
-      v[static_cast<size_t>(k)] = q;
-      z[static_cast<size_t>(k)] = s;
-      z[static_cast<size_t>(k) + 1] = kInf;
-    }
-  }
-
-  // Evaluates at non-decreasing positions q through one cursor, walking the envelope once.
-  struct Cursor {
-    int j = 0;
-  };
-  double eval(const double* f, int stride, double q, Cursor& c) const {
-    while (z[static_cast<size_t>(c.j) + 1] < q) ++c.j;
-    const int p = v[static_cast<size_t>(c.j)];
-    return (q - p) * (q - p) + f[static_cast<size_t>(p) * static_cast<size_t>(stride)];
-  }
-};
-
-}  // namespace
 
 DistanceField build_distance_field(const HeightField& field, const DistanceFieldOptions& o) {
   const int w = field.height.width, h = field.height.height, d = std::max(1, o.depth);
