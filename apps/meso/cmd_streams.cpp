@@ -3,6 +3,7 @@
 #include "meso/core/error.hpp"
 #include "meso/formats/atomic_file.hpp"
 #include "meso/formats/image_io.hpp"
+#include "meso/streams/cone_map.hpp"
 #include "meso/streams/distance_field.hpp"
 #include "meso/streams/pyramid.hpp"
 
@@ -58,12 +59,69 @@ void add_streams(CLI::App& app, Context& ctx) {
                 {"width", height.width},
                 {"height", height.height},
                 {"levels", p.levels.size()},
+                {"bytes", [&p, args] {
+                   size_t n = 0;
+                   for (const Image& l : p.levels) n += l.pixels.size();
+                   return n * (args->half ? 2 : 4);
+                 }()},
                 {"scale", field.scale},
                 {"bias", field.bias},
                 {"border", border_name(field.border)}};
       return 0;
     };
   });
+
+  for (const ConeKind kind : {ConeKind::conservative, ConeKind::relaxed}) {
+    const bool relaxed = kind == ConeKind::relaxed;
+    auto cone_args = std::make_shared<StreamArgs>();
+    auto tolerance = std::make_shared<double>(1e-4);
+    CLI::App* cone = add_stream_subcommand(
+        streams, relaxed ? "relaxed-cone" : "cone",
+        relaxed ? "Relaxed cone map (Policarpo & Oliveira), exact for the bilinear surface: a ray to the cone's boundary crosses it at most once"
+                : "Conservative cone map (Dummer), exact for the bilinear surface: no point of it inside any cone",
+        "Output EXR (MIP-mapped: R = height, G = cone ratio, B = apex height)", *cone_args);
+    cone->add_option("--tolerance", *tolerance, "Relative gap allowed below the exact ratio (the stored one is never wider)")
+        ->check(CLI::Range(1e-6, 0.5))
+        ->capture_default_str();
+    cone->callback([&ctx, cone_args, tolerance, kind] {
+      ctx.run = [&ctx, cone_args, tolerance, kind](nlohmann::json& report, Progress&) {
+        const HeightField field = load_height_field(*cone_args);
+        ConeMapOptions options;
+        options.kind = kind;
+        options.tolerance = *tolerance;
+        options.half = cone_args->half;
+        const std::vector<Image> levels = cone_map_levels(build_cone_map(field, options));
+        OutputSet outputs;
+        write_image_levels(levels, outputs.add(cone_args->output), cone_args->half ? PixelFormat::half : PixelFormat::float32);
+        outputs.commit();
+        info(ctx.globals, "wrote " + cone_args->output + " (" + std::to_string(levels.size()) + " levels)");
+        const Image& l0 = levels[0];
+        size_t capped = 0;
+        float lo = kConeRatioCap;
+        for (size_t i = 0; i < l0.texel_count(); ++i) {
+          const float r = l0.pixels[i * 3 + 1];
+          capped += r >= kConeRatioCap;
+          lo = std::min(lo, r);
+        }
+        size_t texels = 0;
+        for (const Image& l : levels) texels += l.texel_count();
+        report = {{"command", std::string("streams ") + (kind == ConeKind::relaxed ? "relaxed-cone" : "cone")},
+                  {"input", cone_args->input},
+                  {"output", cone_args->output},
+                  {"width", l0.width},
+                  {"height", l0.height},
+                  {"levels", levels.size()},
+                  {"scale", field.scale},
+                  {"bias", field.bias},
+                  {"border", border_name(field.border)},
+                  {"tolerance", *tolerance},
+                  {"min_ratio", lo},
+                  {"unbounded_texels", capped},
+                  {"bytes", texels * 3 * (cone_args->half ? 2 : 4)}};
+        return 0;
+      };
+    });
+  }
 
   auto sdf_args = std::make_shared<StreamArgs>();
   auto sdf_options = std::make_shared<DistanceFieldOptions>();

@@ -1,0 +1,557 @@
+#include "meso/streams/cone_map.hpp"
+
+#include <Imath/half.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+
+namespace meso {
+
+const char* cone_kind_name(ConeKind k) { return k == ConeKind::relaxed ? "relaxed" : "conservative"; }
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+// Depth of the branch and bound on one quarter-texel piece: pieces of 2^-10 of their size.
+// Reached only where the bound converges slowly; the bound is then kept (safe).
+constexpr int kMaxDepth = 10;
+// Relaxed cones stop sooner: along the edge of the region seen descending the bound closes
+// only linearly, and a whole curve of rectangles would reach the depth (measured: 6 keeps
+// the median gap nil at a fraction of the time).
+constexpr int kMaxDepthRelaxed = 6;
+
+
+// S sampled on the half-texel grid: value (a, b) at pixel (a / 2, b / 2), a in [0, 2W],
+// b in [0, 2H]. A quarter-texel piece [a/2, (a+1)/2] x [b/2, (b+1)/2] lies inside one cell
+// between texel centres, where S is one bilinear polynomial, so S on the piece is exactly
+// the bilinear interpolation of the piece's four grid values.
+struct HalfGrid {
+  int gw = 0, gh = 0;
+  std::vector<float> v;
+  float at(int a, int b) const { return v[static_cast<size_t>(b) * static_cast<size_t>(gw) + static_cast<size_t>(a)]; }
+};
+
+HalfGrid half_grid(const HeightField& f) {
+  HalfGrid g;
+  g.gw = 2 * f.height.width + 1;
+  g.gh = 2 * f.height.height + 1;
+  g.v.resize(static_cast<size_t>(g.gw) * static_cast<size_t>(g.gh));
+  tbb::parallel_for(tbb::blocked_range<int>(0, g.gh), [&](const tbb::blocked_range<int>& rows) {
+    for (int b = rows.begin(); b < rows.end(); ++b)
+      for (int a = 0; a < g.gw; ++a) g.v[static_cast<size_t>(b) * static_cast<size_t>(g.gw) + static_cast<size_t>(a)] = f.bilinear(0.5 * a, 0.5 * b);
+  });
+  return g;
+}
+
+// One quarter-texel piece at pixel (x0, y0), 0.5 wide: S = c + a s + b t + e s t with local
+// coordinates s = 2 (x - x0), t = 2 (y - y0) in [0, 1].
+struct Piece {
+  double x0 = 0, y0 = 0, c = 0, a = 0, b = 0, e = 0;
+  Piece(double px, double py, double v00, double v10, double v01, double v11)
+      : x0(px), y0(py), c(v00), a(v10 - v00), b(v01 - v00), e(v00 - v10 - v01 + v11) {}
+  double value(double s, double t) const { return c + a * s + b * t + e * s * t; }
+  double gx(double t) const { return 2.0 * (a + e * t); }  // dS/dx, per pixel
+  double gy(double s) const { return 2.0 * (b + e * s); }
+  double x(double s) const { return x0 + 0.5 * s; }
+  double y(double t) const { return y0 + 0.5 * t; }
+};
+
+// |(x, y)| without std::hypot's overflow guards (slow, and the values here are bounded by
+// the map's size).
+inline double length(double x, double y) { return std::sqrt(x * x + y * y); }
+
+struct Rect {
+  double x0, y0, x1, y1;
+};
+
+double rect_distance(const Rect& r, const Rect& f) {
+  const double dx = std::max({f.x0 - r.x1, 0.0, r.x0 - f.x1});
+  const double dy = std::max({f.y0 - r.y1, 0.0, r.y0 - f.y1});
+  return length(dx, dy);
+}
+
+// The supremum of psi(y) = (S(y) - T) / dist(y, F) over the pieces it is shown, for one
+// footprint F with apex T: the reciprocal of the cone ratio in texels per unit height.
+// `psi` is attained at a point of the surface; `bound` is the largest upper bound of a piece
+// dismissed within the tolerance. The answer lies in [psi, max(psi, bound)].
+class ConeSearch {
+ public:
+  ConeSearch(const Rect& footprint, double top, bool relaxed, double tolerance)
+      : f_(footprint), top_(top), relaxed_(relaxed), tol_(tolerance), max_depth_(relaxed ? kMaxDepthRelaxed : kMaxDepth) {}
+
+  double psi = 0;
+  double bound = 0;
+
+  void piece(const Piece& p) {
+    const double px1 = p.x0 + 0.5, py1 = p.y0 + 0.5;
+    zx_ = p.x0 >= f_.x1 ? 1 : (px1 <= f_.x0 ? -1 : 0);
+    zy_ = p.y0 >= f_.y1 ? 1 : (py1 <= f_.y0 ? -1 : 0);
+    if (zx_ == 0 && zy_ == 0) return;  // inside F, where S <= T
+    if (zx_ != 0 && zy_ != 0) {
+      // Corner zone: the nearest point of F is its corner c; the piece touches c when one of
+      // its corners is c (local coordinates sc, tc).
+      cx_ = zx_ > 0 ? f_.x1 : f_.x0;
+      cy_ = zy_ > 0 ? f_.y1 : f_.y0;
+      touches_ = (cx_ == p.x0 || cx_ == px1) && (cy_ == p.y0 || cy_ == py1);
+      sc_ = cx_ == p.x0 ? 0.0 : 1.0;
+      tc_ = cy_ == p.y0 ? 0.0 : 1.0;
+    }
+    if (zx_ != 0 && zy_ != 0 && touches_ && p.value(sc_, tc_) >= top_) attain_corner_limit(p);
+    refine(p, 0, 0, 1, 1, 0);
+  }
+
+ private:
+  double distance(double x, double y) const {
+    const double dx = std::max({f_.x0 - x, 0.0, x - f_.x1});
+    const double dy = std::max({f_.y0 - y, 0.0, y - f_.y1});
+    return length(dx, dy);
+  }
+  // Some point of F sees the surface at (s, t) fall away: grad S . (y - x) < 0. Linear in x,
+  // so F's corners decide.
+  bool descends(const Piece& p, double s, double t) const {
+    const double gx = p.gx(t), gy = p.gy(s), x = p.x(s), y = p.y(t);
+    for (double fx : {f_.x0, f_.x1})
+      for (double fy : {f_.y0, f_.y1})
+        if (gx * (x - fx) + gy * (y - fy) < 0) return true;
+    return false;
+  }
+  // No point of the rectangle descends: grad S(y) . (y - x) is bilinear in y on a piece (the
+  // gradient is affine and has no x^2 or y^2 term), so its minimum is at a corner.
+  bool never_descends(const Piece& p, double s0, double t0, double s1, double t1) const {
+    for (double s : {s0, s1})
+      for (double t : {t0, t1})
+        if (descends(p, s, t)) return false;
+    return true;
+  }
+  void attain(const Piece& p, double s, double t, double v) {
+    const double d = distance(p.x(s), p.y(t));
+    if (d <= 0 || v <= top_) return;
+    if (relaxed_ && !descends(p, s, t)) return;
+    psi = std::max(psi, (v - top_) / d);
+  }
+
+  // Where the surface reaches T at F's corner c (S(c) = T), psi tends to grad S(c) . u
+  // along the direction u from c: no point attains the supremum over the quadrant, its
+  // limit does (the infimum of the ratio is not attained either). A subdivision keeps the
+  // same few directions at c and would never close the gap, so the limit is taken here:
+  // the support function of the quarter circle at grad S(c). Relaxed cones take it only
+  // where some corner of F sees c's neighbourhood descend (f_k(c) < 0 for an x_k != c).
+  void attain_corner_limit(const Piece& p) {
+    const double gx = p.gx(tc_) * zx_, gy = p.gy(sc_) * zy_;
+    if (relaxed_) {
+      bool falls = false;
+      for (double fx : {f_.x0, f_.x1})
+        for (double fy : {f_.y0, f_.y1})
+          falls |= (fx != cx_ || fy != cy_) && p.gx(tc_) * (cx_ - fx) + p.gy(sc_) * (cy_ - fy) < 0;
+      if (!falls) return;
+    }
+    psi = std::max(psi, gx >= 0 && gy >= 0 ? length(gx, gy) : std::max(gx, gy));
+  }
+
+  void refine(const Piece& p, double s0, double t0, double s1, double t1, int depth) {
+    const std::array<double, 4> ss = {s0, s1, s0, s1}, ts = {t0, t0, t1, t1};
+    std::array<double, 4> v{};
+    double vmax = -kInf;
+    for (int k = 0; k < 4; ++k) {
+      v[k] = p.value(ss[k], ts[k]);
+      vmax = std::max(vmax, v[k]);  // a bilinear function's maximum is at a corner
+    }
+    if (vmax <= top_) return;
+    if (relaxed_ && never_descends(p, s0, t0, s1, t1)) return;
+
+    double upper = 0;
+    if (zx_ == 0 || zy_ == 0) {
+      // Side zone: dist is the gap along one axis. Along a row S is linear, and
+      // (S - T) / gap is then monotone, so the supremum is at a corner; at gap 0 the row's
+      // value tends to at most that of its far end (S <= T on F's edge).
+      for (int k = 0; k < 4; ++k) {
+        const double d = distance(p.x(ss[k]), p.y(ts[k]));
+        if (d > 0) upper = std::max(upper, (v[k] - top_) / d);
+      }
+    } else {
+      // Corner zone: dist = |y - c| >= u . (y - c) for any unit u (Cauchy-Schwarz), with
+      // offsets measured away from F (both >= 0 here). (S - T) / (u . (y - c)) is a
+      // bilinear over a linear function, monotone along each axis, so over the rectangle it
+      // peaks at a corner. Each u gives a bound; the directions to the corners and to the
+      // centre make it tight to second order in the rectangle's angular size (exact when the
+      // supremum sits at a corner, as on a plane).
+      std::array<double, 4> ox{}, oy{};
+      for (int k = 0; k < 4; ++k) {
+        ox[k] = (p.x(ss[k]) - cx_) * zx_;
+        oy[k] = (p.y(ts[k]) - cy_) * zy_;
+      }
+      upper = kInf;
+      auto along = [&](double ux, double uy) {
+        const double n = length(ux, uy);
+        if (n <= 0) return;
+        double b = 0;
+        for (int k = 0; k < 4; ++k) {
+          const double l = (ux * ox[k] + uy * oy[k]) / n;
+          if (l <= 0) return;  // u . (y - c) must stay positive on the rectangle
+          b = std::max(b, (v[k] - top_) / l);
+        }
+        upper = std::min(upper, b);
+      };
+      for (int k = 0; k < 4; ++k) along(ox[k], oy[k]);
+      along(ox[0] + ox[3], oy[0] + oy[3]);
+      if (touches_) {
+        // Mean value bound from c: S(y) - T <= S(c) - T + (grad S(xi) . u) |y - c|, u the
+        // unit direction from c into the zone's quadrant and xi on the segment, inside the
+        // box spanned by c and the rectangle. max over u of g . u is the support function of
+        // the quarter circle (|g| when g points into the quadrant, else its larger component
+        // along the zone), convex in g; the gradient is affine on the piece, so the box's
+        // corners decide.
+        const double bs0 = std::min(s0, sc_), bs1 = std::max(s1, sc_), bt0 = std::min(t0, tc_), bt1 = std::max(t1, tc_);
+        double g = 0;
+        for (double s : {bs0, bs1})
+          for (double t : {bt0, bt1}) {
+            const double gx = p.gx(t) * zx_, gy = p.gy(s) * zy_;
+            g = std::max(g, gx >= 0 && gy >= 0 ? length(gx, gy) : std::max(gx, gy));
+          }
+        double far = 0;
+        for (int k = 0; k < 4; ++k) far = std::max(far, length(p.x(ss[k]) - cx_, p.y(ts[k]) - cy_));
+        if (far > 0) upper = std::min(upper, g + (p.value(sc_, tc_) - top_) / far);
+      }
+    }
+    if (upper <= psi) return;
+    for (int k = 0; k < 4; ++k) attain(p, ss[k], ts[k], v[k]);
+    const double sm = 0.5 * (s0 + s1), tm = 0.5 * (t0 + t1);
+    attain(p, sm, tm, p.value(sm, tm));
+    if (upper <= psi * (1 + tol_) || depth >= max_depth_) {
+      bound = std::max(bound, upper);
+      return;
+    }
+    refine(p, s0, t0, sm, tm, depth + 1);
+    refine(p, sm, t0, s1, tm, depth + 1);
+    refine(p, s0, tm, sm, t1, depth + 1);
+    refine(p, sm, tm, s1, t1, depth + 1);
+  }
+
+  Rect f_;
+  double top_;
+  bool relaxed_;
+  double tol_;
+  int max_depth_;
+  int zx_ = 0, zy_ = 0;
+  double cx_ = 0, cy_ = 0, sc_ = 0, tc_ = 0;
+  bool touches_ = false;
+};
+
+// Maxima of the apex heights over power-of-two blocks of texels: level L, node (nx, ny)
+// covers texels [nx 2^L, (nx+1) 2^L) x [ny 2^L, (ny+1) 2^L) clipped to the map.
+struct MaxTree {
+  std::vector<int> w, h;
+  std::vector<std::vector<float>> level;
+  float at(int l, int x, int y) const {
+    return level[static_cast<size_t>(l)][static_cast<size_t>(y) * static_cast<size_t>(w[static_cast<size_t>(l)]) + static_cast<size_t>(x)];
+  }
+};
+
+MaxTree max_tree(std::vector<float> top, int width, int height) {
+  MaxTree t;
+  t.w.push_back(width);
+  t.h.push_back(height);
+  t.level.push_back(std::move(top));
+  while (t.w.back() > 1 || t.h.back() > 1) {
+    const int fw = t.w.back(), fh = t.h.back(), cw = (fw + 1) / 2, ch = (fh + 1) / 2;
+    std::vector<float> c(static_cast<size_t>(cw) * static_cast<size_t>(ch));
+    const std::vector<float>& fine = t.level.back();
+    for (int y = 0; y < ch; ++y)
+      for (int x = 0; x < cw; ++x) {
+        float m = -1.0f;
+        for (int yy = 2 * y; yy <= std::min(2 * y + 1, fh - 1); ++yy)
+          for (int xx = 2 * x; xx <= std::min(2 * x + 1, fw - 1); ++xx)
+            m = std::max(m, fine[static_cast<size_t>(yy) * static_cast<size_t>(fw) + static_cast<size_t>(xx)]);
+        c[static_cast<size_t>(y) * static_cast<size_t>(cw) + static_cast<size_t>(x)] = m;
+      }
+    t.w.push_back(cw);
+    t.h.push_back(ch);
+    t.level.push_back(std::move(c));
+  }
+  return t;
+}
+
+// Stored ratios round toward zero (a narrower cone is still safe); ratios are >= 0 and
+// below kConeRatioCap, so half's finite range holds them.
+float round_down(double v, bool half) {
+  if (half) {
+    Imath::half hv(static_cast<float>(v));
+    if (static_cast<double>(static_cast<float>(hv)) > v) hv.setBits(static_cast<unsigned short>(hv.bits() - 1));
+    return static_cast<float>(hv);
+  }
+  float f = static_cast<float>(v);
+  if (static_cast<double>(f) > v) f = std::nextafter(f, 0.0f);
+  return f;
+}
+
+float round_up_half(float v) {
+  Imath::half h(v);
+  if (static_cast<float>(h) < v) h.setBits(static_cast<unsigned short>(h.bits() + 1));  // v >= 0 here
+  return static_cast<float>(h);
+}
+
+}  // namespace
+
+Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
+  HeightField field = input;
+  if (o.half)
+    for (float& v : field.height.pixels) v = static_cast<float>(Imath::half(v));
+  const int w = field.height.width, h = field.height.height;
+  const HalfGrid g = half_grid(field);
+  std::vector<float> top(static_cast<size_t>(w) * static_cast<size_t>(h));
+  for (int j = 0; j < h; ++j)
+    for (int i = 0; i < w; ++i) {
+      float m = -1.0f;
+      for (int b = 2 * j; b <= 2 * j + 2; ++b)
+        for (int a = 2 * i; a <= 2 * i + 2; ++a) m = std::max(m, g.at(a, b));
+      top[static_cast<size_t>(j) * static_cast<size_t>(w) + static_cast<size_t>(i)] = m;
+    }
+  const MaxTree tree = max_tree(top, w, h);
+  const int root = static_cast<int>(tree.level.size()) - 1;
+  const double global_max = tree.at(root, 0, 0);
+  const bool relaxed = o.kind == ConeKind::relaxed;
+
+  Image out(w, h, 3);
+  tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {
+    struct Node {
+      int level, x, y;
+    };
+    std::vector<Node> stack;
+    for (int j = rows.begin(); j < rows.end(); ++j)
+      for (int i = 0; i < w; ++i) {
+        const double t = top[static_cast<size_t>(j) * static_cast<size_t>(w) + static_cast<size_t>(i)];
+        const Rect f{static_cast<double>(i), static_cast<double>(j), i + 1.0, j + 1.0};
+        ConeSearch search(f, t, relaxed, o.tolerance);
+        // Depth-first over one copy of the map shifted by (ox, oy) pixels, nearest child
+        // first; a node whose maximum cannot beat the slope attained so far is skipped.
+        auto visit = [&](double ox, double oy) {
+          stack.clear();
+          stack.push_back({root, 0, 0});
+          while (!stack.empty()) {
+            const Node n = stack.back();
+            stack.pop_back();
+            const double m = tree.at(n.level, n.x, n.y);
+            if (m <= t) continue;
+            const int size = 1 << n.level;
+            const Rect r{ox + static_cast<double>(n.x) * size, oy + static_cast<double>(n.y) * size,
+                         ox + std::min(static_cast<double>(n.x + 1) * size, static_cast<double>(w)),
+                         oy + std::min(static_cast<double>(n.y + 1) * size, static_cast<double>(h))};
+            const double d = rect_distance(r, f);
+            if (d > 0 && (m - t) / d <= search.psi) continue;
+            if (n.level == 0) {
+              for (int b = 2 * n.y; b <= 2 * n.y + 1; ++b)
+                for (int a = 2 * n.x; a <= 2 * n.x + 1; ++a)
+                  search.piece(Piece(ox + 0.5 * a, oy + 0.5 * b, g.at(a, b), g.at(a + 1, b), g.at(a, b + 1), g.at(a + 1, b + 1)));
+              continue;
+            }
+            std::array<std::pair<double, Node>, 4> kids;
+            int count = 0;
+            const int l = n.level - 1;
+            for (int cy = 2 * n.y; cy <= std::min(2 * n.y + 1, tree.h[static_cast<size_t>(l)] - 1); ++cy)
+              for (int cx = 2 * n.x; cx <= std::min(2 * n.x + 1, tree.w[static_cast<size_t>(l)] - 1); ++cx) {
+                const int cs = 1 << l;
+                const Rect cr{ox + static_cast<double>(cx) * cs, oy + static_cast<double>(cy) * cs,
+                              ox + std::min(static_cast<double>(cx + 1) * cs, static_cast<double>(w)),
+                              oy + std::min(static_cast<double>(cy + 1) * cs, static_cast<double>(h))};
+                kids[static_cast<size_t>(count++)] = {rect_distance(cr, f), Node{l, cx, cy}};
+              }
+            // Farthest pushed first, so the nearest is searched first (insertion sort of <= 4).
+            for (int a = 1; a < count; ++a)
+              for (int b = a; b > 0 && kids[static_cast<size_t>(b - 1)].first < kids[static_cast<size_t>(b)].first; --b)
+                std::swap(kids[static_cast<size_t>(b - 1)], kids[static_cast<size_t>(b)]);
+            for (int k = 0; k < count; ++k) stack.push_back(kids[static_cast<size_t>(k)].second);
+          }
+        };
+        visit(0, 0);
+        if (field.border == Border::wrap && search.psi > 0) {
+          // Copies of the tile: none farther than (global max - T) / psi can hold a steeper point.
+          const double reach = (global_max - t) / search.psi;
+          const int ax = static_cast<int>(std::ceil(reach / w)) + 1, ay = static_cast<int>(std::ceil(reach / h)) + 1;
+          for (int b = -ay; b <= ay; ++b)
+            for (int a = -ax; a <= ax; ++a) {
+              if (a == 0 && b == 0) continue;
+              const Rect r{static_cast<double>(a) * w, static_cast<double>(b) * h, (a + 1.0) * w, (b + 1.0) * h};
+              const double d = rect_distance(r, f);
+              if (d > 0 && (global_max - t) / d <= search.psi) continue;
+              visit(static_cast<double>(a) * w, static_cast<double>(b) * h);
+            }
+        }
+        const double psi = std::max(search.psi, search.bound);
+        const double ratio = psi > 0 ? 1.0 / (psi * w) : kInf;  // texels -> units of u
+        out.at(i, j, 0) = field.height.at(i, j);
+        out.at(i, j, 1) = round_down(std::min(ratio, static_cast<double>(kConeRatioCap)), o.half);
+        out.at(i, j, 2) = o.half ? round_up_half(static_cast<float>(t)) : static_cast<float>(t);
+      }
+  });
+
+  out.metadata = height_field_metadata(field);
+  out.metadata["quantity"] = std::string(relaxed ? "relaxed cone map" : "cone map");
+  out.metadata["cone_kind"] = std::string(cone_kind_name(o.kind));
+  out.metadata["channels"] = std::string("R = texel height, G = cone ratio, B = apex height (max of the filtered surface over the texel)");
+  out.metadata["ratio_units"] = std::string("units of u per unit of normalised height (texels square; multiply by texels_per_u for texels)");
+  out.metadata["texels_per_u"] = w;
+  out.metadata["ratio_cap"] = kConeRatioCap;
+  out.metadata["tolerance"] = static_cast<float>(o.tolerance);
+  return out;
+}
+
+std::vector<Image> cone_map_levels(Image level0) {
+  std::vector<Image> levels;
+  levels.push_back(std::move(level0));
+  while (levels.back().width > 1 || levels.back().height > 1) {
+    const Image& fine = levels.back();
+    const int fw = fine.width, fh = fine.height, cw = std::max(1, fw / 2), ch = std::max(1, fh / 2);
+    Image coarse(cw, ch, 3);
+    for (int y = 0; y < ch; ++y) {
+      // Finer texels overlapping this one's footprint (as build_min_max_pyramid).
+      const int y0 = static_cast<int>(static_cast<long>(y) * fh / ch);
+      const int y1 = static_cast<int>((static_cast<long>(y + 1) * fh + ch - 1) / ch) - 1;
+      for (int x = 0; x < cw; ++x) {
+        const int x0 = static_cast<int>(static_cast<long>(x) * fw / cw);
+        const int x1 = static_cast<int>((static_cast<long>(x + 1) * fw + cw - 1) / cw) - 1;
+        float hmax = -kConeRatioCap, ratio = kConeRatioCap, apex = -kConeRatioCap;
+        for (int yy = y0; yy <= y1; ++yy)
+          for (int xx = x0; xx <= x1; ++xx) {
+            hmax = std::max(hmax, fine.at(xx, yy, 0));
+            ratio = std::min(ratio, fine.at(xx, yy, 1));
+            apex = std::max(apex, fine.at(xx, yy, 2));
+          }
+        coarse.at(x, y, 0) = hmax;
+        coarse.at(x, y, 1) = ratio;
+        coarse.at(x, y, 2) = apex;
+      }
+    }
+    levels.push_back(std::move(coarse));
+  }
+  return levels;
+}
+
+// ---- the reference tracer ----
+
+bool intersect_footprint(const HeightField& field, int i, int j, const HeightRay& r, double t0, double t1, double& t_hit) {
+  if (!(t1 >= t0)) return false;
+  std::array<double, 4> cut = {t0, t1, t1, t1};
+  int n = 2;
+  if (r.dx != 0) {
+    const double tx = (i + 0.5 - r.x) / r.dx;
+    if (tx > t0 && tx < t1) cut[static_cast<size_t>(n++)] = tx;
+  }
+  if (r.dy != 0) {
+    const double ty = (j + 0.5 - r.y) / r.dy;
+    if (ty > t0 && ty < t1) cut[static_cast<size_t>(n++)] = ty;
+  }
+  std::sort(cut.begin(), cut.begin() + n);
+  for (int k = 0; k + 1 < n; ++k) {
+    const double ta = cut[static_cast<size_t>(k)], tb = cut[static_cast<size_t>(k + 1)];
+    const double tm = 0.5 * (ta + tb);
+    // The piece under the middle of this stretch: half-grid column and row.
+    const double xm = std::clamp(r.x + tm * r.dx, static_cast<double>(i), i + 1.0);
+    const double ym = std::clamp(r.y + tm * r.dy, static_cast<double>(j), j + 1.0);
+    const double px = xm < i + 0.5 ? i : i + 0.5, py = ym < j + 0.5 ? j : j + 0.5;
+    const Piece p(px, py, field.bilinear(px, py), field.bilinear(px + 0.5, py), field.bilinear(px, py + 0.5),
+                  field.bilinear(px + 0.5, py + 0.5));
+    // g(t) = S(ray(t)) - z(t) = A t^2 + B t + C, with s = s0 + sd t and u = u0 + ud t.
+    const double s0 = 2 * (r.x - px), sd = 2 * r.dx, u0 = 2 * (r.y - py), ud = 2 * r.dy;
+    const double A = p.e * sd * ud;
+    const double B = p.a * sd + p.b * ud + p.e * (s0 * ud + u0 * sd) - r.dz;
+    const double C = p.c + p.a * s0 + p.b * u0 + p.e * s0 * u0 - r.z;
+    auto g = [&](double t) { return (A * t + B) * t + C; };
+    if (g(ta) >= 0) {
+      t_hit = ta;
+      return true;
+    }
+    double best = kInf;
+    const double scale = std::abs(A) * tb * tb + std::abs(B) * tb + std::abs(C);
+    if (std::abs(A) * (tb - ta) * (tb - ta) <= 1e-14 * scale) {
+      if (B != 0) best = -C / B;
+    } else {
+      const double disc = B * B - 4 * A * C;
+      if (disc >= 0) {
+        const double q = -0.5 * (B + std::copysign(std::sqrt(disc), B));
+        for (double root : {q / A, q != 0 ? C / q : kInf})
+          if (root >= ta && root <= tb) best = std::min(best, root);
+      }
+    }
+    if (best >= ta && best <= tb) {
+      t_hit = best;
+      return true;
+    }
+    if (g(tb) >= 0) {
+      // Rounding hid the root: bisect the sign change.
+      double lo = ta, hi = tb;
+      for (int it = 0; it < 100 && hi - lo > 0; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        if (mid <= lo || mid >= hi) break;
+        (g(mid) >= 0 ? hi : lo) = mid;
+      }
+      t_hit = hi;
+      return true;
+    }
+  }
+  return false;
+}
+
+HeightHit trace_cone_map(const HeightField& field, const Image& cone, ConeKind kind, const HeightRay& r, int max_steps) {
+  HeightHit out;
+  const int w = field.height.width, h = field.height.height;
+  if (!(r.dz < 0)) return out;
+  const double horizontal = length(r.dx, r.dy);
+  const double t_floor = r.z / -r.dz;  // where the ray reaches height 0, below every surface
+  double t = r.z > 1 ? (r.z - 1) / -r.dz : 0.0;
+  auto wrap = [](int k, int n) { return ((k % n) + n) % n; };
+  while (out.steps < max_steps) {
+    ++out.steps;
+    const double x = r.x + t * r.dx, y = r.y + t * r.dy, z = r.z + t * r.dz;
+    if (field.border == Border::clamp && (x < 0 || y < 0 || x > w || y > h)) return out;
+    // The texel the ray is in or entering (a point on an edge belongs to the texel ahead).
+    int i = static_cast<int>(std::floor(x)), j = static_cast<int>(std::floor(y));
+    if (x == i && r.dx < 0) --i;
+    if (y == j && r.dy < 0) --j;
+    if (field.border == Border::clamp) {
+      i = std::clamp(i, 0, w - 1);
+      j = std::clamp(j, 0, h - 1);
+    }
+    const int ci = wrap(i, w), cj = wrap(j, h);
+    const double ratio = static_cast<double>(cone.at(ci, cj, 1)) * w, apex = cone.at(ci, cj, 2);
+    double t_exit = t_floor;
+    if (r.dx > 0) t_exit = std::min(t_exit, (i + 1 - r.x) / r.dx);
+    if (r.dx < 0) t_exit = std::min(t_exit, (i - r.x) / r.dx);
+    if (r.dy > 0) t_exit = std::min(t_exit, (j + 1 - r.y) / r.dy);
+    if (r.dy < 0) t_exit = std::min(t_exit, (j - r.y) / r.dy);
+    t_exit = std::max(t_exit, t);
+    const double step = z >= apex ? ratio * (z - apex) / (horizontal + ratio * -r.dz) : 0.0;
+    if (t + step < t_exit) {
+      double th = 0;
+      if (intersect_footprint(field, i, j, r, t, t_exit, th)) {
+        out.hit = true;
+        out.t = th;
+        return out;
+      }
+      if (t_exit >= t_floor) return out;
+      t = t_exit;
+      continue;
+    }
+    const double tq = std::min(t + step, t_floor);
+    if (kind == ConeKind::relaxed &&
+        field.bilinear(r.x + tq * r.dx, r.y + tq * r.dy) >= r.z + tq * r.dz) {
+      // One crossing in [t, tq] (the relaxed cone's guarantee): bisect it.
+      double lo = t, hi = tq;
+      for (int it = 0; it < 64; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        if (mid <= lo || mid >= hi) break;
+        (field.bilinear(r.x + mid * r.dx, r.y + mid * r.dy) >= r.z + mid * r.dz ? hi : lo) = mid;
+      }
+      out.hit = true;
+      out.t = hi;
+      return out;
+    }
+    t = tq;
+  }
+  return out;
+}
+
+}  // namespace meso

@@ -1,0 +1,379 @@
+#include "meso/streams/cone_map.hpp"
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <random>
+
+namespace meso {
+namespace {
+
+HeightField field_from(int w, int h, Border border, const std::function<float(int, int)>& f) {
+  Image img(w, h, 1);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) img.at(x, y) = f(x, y);
+  return make_height_field(img, border);
+}
+
+HeightField noise(int w, int h, Border border, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> d(0.0f, 1.0f);
+  return field_from(w, h, border, [&](int, int) { return d(rng); });
+}
+
+// Structured maps: steps, a single spike, smooth bumps.
+HeightField steps(int w, int h) {
+  return field_from(w, h, Border::clamp, [](int x, int y) { return static_cast<float>(((x / 3) + (y / 5)) % 4); });
+}
+HeightField bumps(int w, int h, Border border) {
+  return field_from(w, h, border, [&](int x, int y) {
+    return static_cast<float>(std::sin(6.2831853 * x / w) * std::cos(6.2831853 * 2 * y / h));
+  });
+}
+
+double ratio_texels(const Image& cone, int i, int j) { return static_cast<double>(cone.at(i, j, 1)) * cone.width; }
+
+// Brute force over the definition: psi = sup (S(y) - T_p) / dist(y, F_p) over the surface,
+// sampled at n x n points of every quarter-texel piece (the pieces' corners included), over
+// `tiles` copies of the map each way when it wraps. Relaxed: only points some corner of F_p
+// sees descending (the piece's own gradient, as at a crease the ray comes from that side).
+double brute_psi(const HeightField& f, int i, int j, double top, bool relaxed, int n, int tiles) {
+  const int w = f.height.width, h = f.height.height;
+  double psi = 0;
+  for (int ty = -tiles; ty <= tiles; ++ty)
+    for (int tx = -tiles; tx <= tiles; ++tx)
+      for (int b = 0; b < 2 * h; ++b)
+        for (int a = 0; a < 2 * w; ++a) {
+          const double px = 0.5 * a, py = 0.5 * b;
+          const double v00 = f.bilinear(px, py), v10 = f.bilinear(px + 0.5, py), v01 = f.bilinear(px, py + 0.5),
+                       v11 = f.bilinear(px + 0.5, py + 0.5);
+          if (std::max({v00, v10, v01, v11}) <= top) continue;
+          // Pieces within a texel of F: 8 times denser, where psi changes fastest.
+          const double gap_x = std::max({i - (px + 0.5 + tx * w), 0.0, px + tx * w - (i + 1)});
+          const double gap_y = std::max({j - (py + 0.5 + ty * h), 0.0, py + ty * h - (j + 1)});
+          // plus points closing in on the piece's edges, where limits toward F's boundary live.
+          const bool near = std::hypot(gap_x, gap_y) < 1;
+          const int m = near ? 8 * n : n;
+          std::vector<double> at;
+          for (int k = 0; k <= m; ++k) at.push_back(static_cast<double>(k) / m);
+          if (near)
+            for (double e : {1e-6, 1e-4, 1e-3}) {
+              at.push_back(e);
+              at.push_back(1 - e);
+            }
+          std::vector<std::pair<double, double>> points;
+          for (double t : at)
+            for (double s : at) points.emplace_back(s, t);
+          if (near)
+            // Fans of directions out of each corner of the piece: where S reaches T on F's
+            // boundary, psi's supremum is a limit along one direction out of that point.
+            for (double cs : {0.0, 1.0})
+              for (double ct : {0.0, 1.0})
+                for (int k = 0; k <= 256; ++k) {
+                  const double angle = 1.5707963267948966 * k / 256, r = 1e-5;
+                  points.emplace_back(std::abs(cs - r * std::cos(angle)), std::abs(ct - r * std::sin(angle)));
+                }
+          for (const auto& [s, t] : points) {
+              const double v = v00 + (v10 - v00) * s + (v01 - v00) * t + (v00 - v10 - v01 + v11) * s * t;
+              if (v <= top) continue;
+              const double x = px + 0.5 * s + tx * w, y = py + 0.5 * t + ty * h;
+              const double dx = std::max({i - x, 0.0, x - (i + 1)}), dy = std::max({j - y, 0.0, y - (j + 1)});
+              const double d = std::hypot(dx, dy);
+              if (d <= 0) continue;
+              if (relaxed) {
+                const double gx = 2 * ((v10 - v00) + (v00 - v10 - v01 + v11) * t);
+                const double gy = 2 * ((v01 - v00) + (v00 - v10 - v01 + v11) * s);
+                bool falls = false;
+                for (double fx : {static_cast<double>(i), i + 1.0})
+                  for (double fy : {static_cast<double>(j), j + 1.0}) falls |= gx * (x - fx) + gy * (y - fy) < 0;
+                if (!falls) continue;
+              }
+              psi = std::max(psi, (v - top) / d);
+            }
+        }
+  return psi;
+}
+
+struct BruteCase {
+  const char* name;
+  std::function<HeightField()> make;
+  int samples, tiles;
+};
+
+class ConeBruteForce : public ::testing::TestWithParam<std::tuple<BruteCase, ConeKind>> {};
+
+// Every stored cone is safe against the sampled surface (it can only be narrower than the
+// brute force, never wider) and, for conservative cones, equal to it within 1e-3: the
+// sampled supremum misses the true one only between samples.
+TEST_P(ConeBruteForce, SafeAndTightAgainstTheDefinition) {
+  const auto& [c, kind] = GetParam();
+  const HeightField f = c.make();
+  const Image cone = build_cone_map(f, {kind, 1e-4, false});
+  double worst_gap = 0;
+  std::vector<double> gaps = {0};
+  for (int j = 0; j < f.height.height; ++j)
+    for (int i = 0; i < f.height.width; ++i) {
+      const double top = cone.at(i, j, 2);
+      const double psi = brute_psi(f, i, j, top, kind == ConeKind::relaxed, c.samples, c.tiles);
+      const double stored = ratio_texels(cone, i, j);
+      if (psi == 0) {
+        EXPECT_EQ(cone.at(i, j, 1), kConeRatioCap) << i << "," << j;
+        continue;
+      }
+      const double brute = std::min(1.0 / psi, static_cast<double>(kConeRatioCap) * f.height.width);
+      ASSERT_LE(stored, brute * (1 + 1e-6)) << c.name << " texel " << i << "," << j << ": wider than the surface allows";
+      worst_gap = std::max(worst_gap, 1 - stored / brute);
+      gaps.push_back(1 - stored / brute);
+    }
+  std::sort(gaps.begin(), gaps.end());
+  if (kind == ConeKind::conservative) {
+    EXPECT_LT(worst_gap, 1e-3) << c.name;
+  } else {
+    // Relaxed: where the apex T sits on F's boundary, the set of descending points fans out
+    // of that point and the bound is kept (safe); measured here, typical gaps are nil.
+    EXPECT_LT(gaps[gaps.size() / 2], 1e-3) << c.name;
+    EXPECT_LT(worst_gap, 0.35) << c.name;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Maps, ConeBruteForce,
+    ::testing::Combine(::testing::Values(BruteCase{"noise16", [] { return noise(16, 16, Border::clamp, 7); }, 8, 0},
+                                         BruteCase{"noise13x9", [] { return noise(13, 9, Border::clamp, 11); }, 8, 0},
+                                         BruteCase{"steps", [] { return steps(16, 14); }, 8, 0},
+                                         BruteCase{"bumps", [] { return bumps(16, 16, Border::clamp); }, 8, 0},
+                                         BruteCase{"noise_wrap", [] { return noise(10, 8, Border::wrap, 3); }, 4, 2},
+                                         BruteCase{"bumps_wrap", [] { return bumps(12, 12, Border::wrap); }, 4, 2}),
+                       ::testing::Values(ConeKind::conservative, ConeKind::relaxed)),
+    [](const auto& param_info) {
+      return std::string(std::get<0>(param_info.param).name) + "_" + cone_kind_name(std::get<1>(param_info.param));
+    });
+
+// A single spike on a flat map: from a texel k texels beside it along a row, the widest cone
+// reaches exactly to the peak (the flanks fall at least as fast as the distance shrinks), so
+// the ratio is the distance from the footprint to the peak: k - 1/2 texels per unit height.
+TEST(ConeMap, SpikeGivesTheDistanceToThePeak) {
+  const HeightField f = field_from(11, 11, Border::clamp, [](int x, int y) { return x == 5 && y == 5 ? 1.0f : 0.0f; });
+  const Image cone = build_cone_map(f, {});
+  for (int k = 2; k <= 5; ++k) {
+    EXPECT_NEAR(ratio_texels(cone, 5 - k, 5), k - 0.5, (k - 0.5) * 1e-4) << k;
+    EXPECT_LE(ratio_texels(cone, 5 - k, 5), k - 0.5);
+    EXPECT_NEAR(ratio_texels(cone, 5, 5 + k), k - 0.5, (k - 0.5) * 1e-4) << k;
+  }
+  EXPECT_EQ(cone.at(5, 5, 1), kConeRatioCap) << "nothing is higher than the peak";
+  EXPECT_EQ(cone.at(5, 5, 2), 1.0f);
+  EXPECT_EQ(cone.at(6, 5, 2), 0.5f) << "apex: the shared edge's midpoint";
+}
+
+// A ramp rising along x (clamped: flat beyond the last centre). Its slope is 1/(W-1) per
+// texel, so the conservative ratio is W - 1 texels; nothing descends, so the relaxed cone is
+// unbounded.
+TEST(ConeMap, RampHasItsSlopeAndNoRelaxedLimit) {
+  const int w = 12;
+  const HeightField f = field_from(w, 5, Border::clamp, [](int x, int) { return static_cast<float>(x); });
+  const Image cone = build_cone_map(f, {});
+  const Image relaxed = build_cone_map(f, {ConeKind::relaxed, 1e-4, false});
+  for (int j = 0; j < 5; ++j)
+    for (int i = 0; i < w - 2; ++i) {
+      EXPECT_NEAR(ratio_texels(cone, i, j), w - 1.0, (w - 1.0) * 1e-4) << i << "," << j;
+      EXPECT_EQ(relaxed.at(i, j, 1), kConeRatioCap) << i << "," << j;
+    }
+}
+
+TEST(ConeMap, DegenerateMapsGetFiniteCappedCones) {
+  for (const auto& [w, h] : {std::pair{1, 1}, std::pair{1, 7}, std::pair{9, 1}, std::pair{6, 4}}) {
+    for (Border border : {Border::clamp, Border::wrap}) {
+      const Image flat = build_cone_map(field_from(w, h, border, [](int, int) { return 3.0f; }), {});
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) EXPECT_EQ(flat.at(x, y, 1), kConeRatioCap);
+      const HeightField n = noise(w, h, border, 5);
+      for (ConeKind kind : {ConeKind::conservative, ConeKind::relaxed}) {
+        const Image cone = build_cone_map(n, {kind, 1e-4, false});
+        for (float v : cone.pixels) EXPECT_TRUE(std::isfinite(v));
+        for (int y = 0; y < h; ++y)
+          for (int x = 0; x < w; ++x) {
+            const double top = cone.at(x, y, 2);
+            const double psi = brute_psi(n, x, y, top, kind == ConeKind::relaxed, 4, border == Border::wrap ? 3 : 0);
+            if (psi > 0) {
+              EXPECT_LE(ratio_texels(cone, x, y), 1.0 / psi * (1 + 1e-6)) << w << "x" << h;
+            }
+          }
+      }
+    }
+  }
+}
+
+// The surface at height z along the ray, minus the ray: >= 0 means at or below the surface.
+double below(const HeightField& f, const HeightRay& r, double t) { return f.bilinear(r.x + t * r.dx, r.y + t * r.dy) - (r.z + t * r.dz); }
+
+// A dense march (1/64 texel steps horizontally, bisection of the first sign change).
+bool reference_hit(const HeightField& f, const HeightRay& r, double& t_hit) {
+  const double horizontal = std::hypot(r.dx, r.dy);
+  const double t_end = r.z / -r.dz;
+  const double dt = std::min(t_end / 64, horizontal > 0 ? (1.0 / 64) / horizontal : t_end);
+  const int w = f.height.width, h = f.height.height;
+  for (double t = 0; t < t_end + dt; t += dt) {
+    const double tc = std::min(t, t_end);
+    const double x = r.x + tc * r.dx, y = r.y + tc * r.dy;
+    if (f.border == Border::clamp && (x < 0 || y < 0 || x > w || y > h)) return false;
+    if (below(f, r, tc) >= 0) {
+      double lo = std::max(0.0, tc - dt), hi = tc;
+      for (int k = 0; k < 60; ++k) {
+        const double mid = 0.5 * (lo + hi);
+        (below(f, r, mid) >= 0 ? hi : lo) = mid;
+      }
+      t_hit = hi;
+      return true;
+    }
+  }
+  return false;
+}
+
+// Rays from above at every angle, down to grazing: the cone tracer finds the same first
+// intersection as the dense march (never a later one), on the surface.
+TEST(ConeTrace, FindsTheFirstIntersection) {
+  for (Border border : {Border::clamp, Border::wrap}) {
+    const HeightField f = border == Border::clamp ? noise(24, 20, border, 9) : bumps(16, 16, border);
+    for (ConeKind kind : {ConeKind::conservative, ConeKind::relaxed}) {
+      const Image cone = build_cone_map(f, {kind, 1e-4, false});
+      std::mt19937 rng(17);
+      std::uniform_real_distribution<double> u(0, 1);
+      int hits = 0, total_steps = 0;
+      for (int k = 0; k < 400; ++k) {
+        const double elevation = 0.02 + 1.5 * u(rng);  // radians above the horizon
+        const double azimuth = 6.2831853 * u(rng);
+        HeightRay r;
+        r.x = 2 + u(rng) * (f.height.width - 4);
+        r.y = 2 + u(rng) * (f.height.height - 4);
+        r.z = 1.0;
+        r.dx = std::cos(azimuth) * std::cos(elevation);
+        r.dy = std::sin(azimuth) * std::cos(elevation);
+        r.dz = -std::sin(elevation);
+        double t_ref = 0;
+        const bool ref = reference_hit(f, r, t_ref);
+        const HeightHit got = trace_cone_map(f, cone, kind, r);
+        total_steps += got.steps;
+        if (!ref) continue;
+        ++hits;
+        ASSERT_TRUE(got.hit) << cone_kind_name(kind) << " ray " << k << " missed";
+        EXPECT_LE(got.t, t_ref + 1e-6) << cone_kind_name(kind) << " ray " << k << " skipped the first intersection";
+        EXPECT_NEAR(below(f, r, got.t), 0.0, 1e-6) << cone_kind_name(kind) << " ray " << k;
+        if (got.t < t_ref - 1e-3) {
+          // Earlier than the march: only a grazing touch the march stepped over.
+          EXPECT_GE(below(f, r, got.t), -1e-9);
+        }
+      }
+      EXPECT_GT(hits, 200);
+      EXPECT_LT(total_steps, 400 * 200) << "cone steps should skip most texels";
+    }
+  }
+}
+
+// The relaxed cone's promise, checked directly: from any point above the apex over the
+// footprint, a ray to the cone's boundary crosses the surface at most once, from above to
+// below. The conservative cone's: that ray never enters the solid at all.
+TEST(ConeMap, StepsToTheConeBoundaryCrossAtMostOnce) {
+  const HeightField f = noise(20, 20, Border::clamp, 21);
+  for (ConeKind kind : {ConeKind::conservative, ConeKind::relaxed}) {
+    const Image cone = build_cone_map(f, {kind, 1e-4, false});
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> u(0, 1);
+    for (int k = 0; k < 3000; ++k) {
+      const int i = 2 + static_cast<int>(u(rng) * 16), j = 2 + static_cast<int>(u(rng) * 16);
+      const double apex = cone.at(i, j, 2), ratio = ratio_texels(cone, i, j);
+      HeightRay r;
+      r.x = i + u(rng);
+      r.y = j + u(rng);
+      r.z = apex + (1.0 - apex) * u(rng);
+      const double elevation = 0.01 + 1.55 * u(rng), azimuth = 6.2831853 * u(rng);
+      r.dx = std::cos(azimuth) * std::cos(elevation);
+      r.dy = std::sin(azimuth) * std::cos(elevation);
+      r.dz = -std::sin(elevation);
+      const double step = ratio * (r.z - apex) / (std::cos(elevation) + ratio * std::sin(elevation));
+      int crossings = 0;
+      bool inside = below(f, r, 0) > 0;
+      ASSERT_FALSE(inside);
+      const int n = 2000;
+      for (int s = 1; s <= n; ++s) {
+        const double t = step * s / n;
+        const double x = r.x + t * r.dx, y = r.y + t * r.dy;
+        if (x < 0 || y < 0 || x > 20 || y > 20) break;
+        const bool now = below(f, r, t) > 1e-7;
+        if (now != inside) {
+          ++crossings;
+          ASSERT_TRUE(now) << cone_kind_name(kind) << " texel " << i << "," << j << ": the ray leaves the solid inside the cone";
+        }
+        inside = now;
+      }
+      if (kind == ConeKind::conservative) {
+        ASSERT_EQ(crossings, 0) << "texel " << i << "," << j;
+      } else {
+        ASSERT_LE(crossings, 1) << "texel " << i << "," << j;
+      }
+    }
+  }
+}
+
+TEST(ConeMap, RelaxedConesAreNeverNarrower) {
+  const HeightField f = noise(32, 32, Border::wrap, 2);
+  const Image c = build_cone_map(f, {});
+  const Image r = build_cone_map(f, {ConeKind::relaxed, 1e-4, false});
+  int wider = 0;
+  for (int j = 0; j < 32; ++j)
+    for (int i = 0; i < 32; ++i) {
+      EXPECT_GE(r.at(i, j, 1), c.at(i, j, 1) * (1 - 2e-4f));
+      wider += r.at(i, j, 1) > c.at(i, j, 1) * 1.01f;
+    }
+  EXPECT_GT(wider, 32) << "relaxing should widen cones of a noisy map";
+}
+
+TEST(ConeMap, SameBytesWhateverTheThreadCount) {
+  const HeightField f = bumps(40, 33, Border::wrap);
+  Image one;
+  {
+    tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
+    one = build_cone_map(f, {ConeKind::relaxed, 1e-4, false});
+  }
+  const Image many = build_cone_map(f, {ConeKind::relaxed, 1e-4, false});
+  EXPECT_EQ(one.pixels, many.pixels);
+}
+
+TEST(ConeMap, HalfStorageRoundsSafely) {
+  const HeightField f = noise(12, 12, Border::clamp, 8);
+  const Image half = build_cone_map(f, {ConeKind::conservative, 1e-4, true});
+  for (int j = 0; j < 12; ++j)
+    for (int i = 0; i < 12; ++i) {
+      // Safe for the surface the half heights describe (the one a shader samples).
+      Image q(12, 12, 1);
+      for (int y = 0; y < 12; ++y)
+        for (int x = 0; x < 12; ++x) q.at(x, y) = half.at(x, y, 0);
+      HeightField hq = f;
+      hq.height = q;
+      const double psi = brute_psi(hq, i, j, half.at(i, j, 2), false, 4, 0);
+      if (psi > 0) {
+        EXPECT_LE(ratio_texels(half, i, j), 1.0 / psi * (1 + 1e-6));
+      }
+    }
+}
+
+TEST(ConeMap, MipLevelsTakeTheMinimumRatioAndMaximumApex) {
+  const HeightField f = noise(9, 6, Border::clamp, 4);
+  const std::vector<Image> levels = cone_map_levels(build_cone_map(f, {}));
+  ASSERT_EQ(levels.size(), 4u);  // 9x6 -> 4x3 -> 2x1 -> 1x1
+  const Image &l0 = levels[0], &l1 = levels[1];
+  // Level-1 texel (1, 0) covers level-0 columns [2.25, 4.5) -> 2..4, rows [0, 2) -> 0..1.
+  float ratio = 1e30f, apex = -1;
+  for (int y = 0; y <= 1; ++y)
+    for (int x = 2; x <= 4; ++x) {
+      ratio = std::min(ratio, l0.at(x, y, 1));
+      apex = std::max(apex, l0.at(x, y, 2));
+    }
+  EXPECT_EQ(l1.at(1, 0, 1), ratio);
+  EXPECT_EQ(l1.at(1, 0, 2), apex);
+}
+
+}  // namespace
+}  // namespace meso
