@@ -4,11 +4,15 @@
 #include "meso/bake/bake.hpp"
 #include "meso/examples/brick_wall.hpp"
 #include "meso/meshreduce/meshreduce.hpp"
+#include "meso/streams/cone_map.hpp"
 #include "meso/streams/distance_field.hpp"
 #include "meso/streams/pyramid.hpp"
 #include "meso/uvpack/uv_check.hpp"
 
 #include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <random>
 
 namespace meso {
 namespace {
@@ -82,6 +86,63 @@ void BM_DistanceField(benchmark::State& state) {
       benchmark::Counter(static_cast<double>(state.iterations()) * n * n * o.depth, benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_DistanceField)->Arg(256)->Arg(1024)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// Height maps for the cone benchmarks: 0 = the example's bricks, 1 = uniform noise,
+// 2 = smooth bumps (the hard case: cones touch the surface along its inflections).
+HeightField cone_input(int kind, int n) {
+  if (kind == 0) return brick_height_field(n);
+  Image img(n, n, 1);
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<float> d(0.0f, 1.0f);
+  for (int y = 0; y < n; ++y)
+    for (int x = 0; x < n; ++x)
+      img.at(x, y) = kind == 1 ? d(rng) : static_cast<float>(std::sin(6.2831853 * 4 * x / n) * std::cos(6.2831853 * 3 * y / n));
+  return make_height_field(img, Border::clamp);
+}
+
+void BM_ConeMap(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const HeightField f = cone_input(static_cast<int>(state.range(1)), n);
+  ConeMapOptions o;
+  o.kind = state.range(2) != 0 ? ConeKind::relaxed : ConeKind::conservative;
+  for (auto _ : state) {
+    const Image cone = build_cone_map(f, o);
+    benchmark::DoNotOptimize(cone.pixels.data());
+  }
+  state.counters["texels/s"] =
+      benchmark::Counter(static_cast<double>(state.iterations()) * n * n, benchmark::Counter::kIsRate);
+}
+// Args: size, map (0 bricks, 1 noise, 2 bumps), relaxed.
+BENCHMARK(BM_ConeMap)
+    ->Args({256, 0, 0})->Args({256, 1, 0})->Args({256, 2, 0})
+    ->Args({256, 0, 1})->Args({256, 1, 1})->Args({256, 2, 1})
+    ->Args({1024, 0, 0})->Args({1024, 1, 0})->Args({1024, 0, 1})->Args({1024, 1, 1})
+    ->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+
+// The brute force of the literature's definition, for scale: every texel against every
+// texel centre (not even the filtered surface between them), one core.
+void BM_ConeMapBruteForce(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const HeightField f = cone_input(static_cast<int>(state.range(1)), n);
+  const std::vector<float>& h = f.height.pixels;
+  std::vector<float> ratio(h.size());
+  for (auto _ : state) {
+    for (int p = 0; p < n * n; ++p) {
+      double best = 1e30;
+      for (int q = 0; q < n * n; ++q) {
+        const double dh = h[static_cast<size_t>(q)] - h[static_cast<size_t>(p)];
+        if (dh <= 0) continue;
+        const double dx = q % n - p % n, dy = q / n - p / n;
+        best = std::min(best, std::sqrt(dx * dx + dy * dy) / dh);
+      }
+      ratio[static_cast<size_t>(p)] = static_cast<float>(best);
+    }
+    benchmark::DoNotOptimize(ratio.data());
+  }
+  state.counters["texels/s"] =
+      benchmark::Counter(static_cast<double>(state.iterations()) * n * n, benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_ConeMapBruteForce)->Args({128, 0})->Args({256, 0})->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 
 void BM_UvCheck(benchmark::State& state) {
   UvCheckOptions o;

@@ -67,6 +67,7 @@ TEST(Cli, BadUsageExitsTwo) {
   EXPECT_EQ(run("preview --headless base.obj --maps d").code, 2) << "--headless without --png";
   EXPECT_EQ(run("streams pyramid h.exr -o p.exr --wrap --clamp").code, 2);
   EXPECT_EQ(run("streams sdf h.exr -o s.exr --depth 0").code, 2);
+  EXPECT_EQ(run("streams cone h.exr -o c.exr --tolerance 0").code, 2);
   EXPECT_EQ(run("preview base.obj --maps d --headless --png p.png --zoom nan").code, 2);
   EXPECT_EQ(run("meshreduce in.obj -o out.obj --ratio nan").code, 2);
   EXPECT_EQ(run("streams sdf h.exr -o s.exr --relief inf").code, 2);
@@ -96,6 +97,7 @@ TEST(Cli, BadInputExitsThreeWithOneLineNamingTheFileAndNoOutput) {
            (dir / "maps").string() + " --size 16",
        "fan.obj"},
       {"streams pyramid " + (dir / "nan.exr").string() + " -o " + (dir / "o.png").string(), "nan.exr"},
+      {"streams relaxed-cone " + (dir / "nan.exr").string() + " -o " + (dir / "o.png").string(), "nan.exr"},
   };
   for (const auto& c : cases) {
     const Result r = run(c.args);
@@ -224,6 +226,28 @@ TEST_F(Skeleton, WholePipeline) {
   EXPECT_EQ(levels.back().at(0, 0, 0), 0.0f) << "normalised minimum";
   EXPECT_EQ(levels.back().at(0, 0, 1), 1.0f) << "normalised maximum";
   EXPECT_EQ(nlohmann::json::parse(pyramid.out)["levels"], 8);
+
+  // Cone maps of the baked displacement: the MIP chain of the pyramid's sizes, apexes equal
+  // to the pyramid's footprint maxima, ratios finite, relaxed never narrower, coarse levels
+  // minimum-filtered.
+  const Result cone = run("streams cone " + (d / "maps" / "displacement.exr").string() + " -o " + (d / "cone.exr").string() + " --json");
+  ASSERT_EQ(cone.code, 0) << cone.err;
+  const Result relaxed = run("streams relaxed-cone " + (d / "maps" / "displacement.exr").string() + " -o " +
+                             (d / "relaxed-cone.exr").string());
+  ASSERT_EQ(relaxed.code, 0) << relaxed.err;
+  const auto cones = read_image_levels(d / "cone.exr"), relaxed_cones = read_image_levels(d / "relaxed-cone.exr");
+  ASSERT_EQ(cones.size(), 8u);
+  const auto cone_report = nlohmann::json::parse(cone.out);
+  EXPECT_EQ(cone_report["levels"], 8);
+  EXPECT_GT(cone_report["bytes"].get<size_t>(), 128u * 64u * 12u);
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 128; ++x) {
+      ASSERT_EQ(cones[0].at(x, y, 2), levels[0].at(x, y, 1)) << x << "," << y;
+      ASSERT_TRUE(std::isfinite(cones[0].at(x, y, 1)));
+      ASSERT_GE(relaxed_cones[0].at(x, y, 1), cones[0].at(x, y, 1) * (1 - 2e-4f));
+    }
+  EXPECT_EQ(cones[1].at(3, 5, 1), std::min({cones[0].at(6, 10, 1), cones[0].at(7, 10, 1), cones[0].at(6, 11, 1), cones[0].at(7, 11, 1)}));
+  EXPECT_EQ(std::get<std::string>(relaxed_cones[0].metadata.at("cone_kind")), "relaxed");
 
   const Result sdf = run("streams sdf " + (d / "maps" / "displacement.exr").string() + " -o " + (d / "sdf.exr").string() +
                          " --depth 8 --relief 0.05");
