@@ -131,8 +131,36 @@ class ConeSearch {
     const double d = distance(p.x(s), p.y(t));
     if (d <= 0 || v <= top_) return;
     if (relaxed_ && !descends(p, s, t)) return;
-    psi = std::max(psi, (v - top_) / d);
+    if ((v - top_) / d > psi) {
+      psi = (v - top_) / d;
+      best = {p.x(s), p.y(t), v, p.gx(t), p.gy(s), true};
+    }
   }
+
+ public:
+  // The point that gave psi, to seed the search of a neighbouring texel: its steepest point
+  // is usually close by, and a good slope from the start lets the search skip more.
+  struct Point {
+    double x = 0, y = 0, v = 0, gx = 0, gy = 0;
+    bool valid = false;
+  } best;
+  void seed(const Point& q) {
+    if (!q.valid) return;
+    const double d = distance(q.x, q.y);
+    if (d <= 0 || q.v <= top_) return;
+    if (relaxed_) {
+      bool falls = false;
+      for (double fx : {f_.x0, f_.x1})
+        for (double fy : {f_.y0, f_.y1}) falls |= q.gx * (q.x - fx) + q.gy * (q.y - fy) < 0;
+      if (!falls) return;
+    }
+    if ((q.v - top_) / d > psi) {
+      psi = (q.v - top_) / d;
+      best = q;
+    }
+  }
+
+ private:
 
   // Where the surface reaches T at F's corner c (S(c) = T), psi tends to grad S(c) . u
   // along the direction u from c: no point attains the supremum over the quadrant, its
@@ -241,38 +269,170 @@ class ConeSearch {
   bool touches_ = false;
 };
 
-// Maxima of the apex heights over power-of-two blocks of texels: level L, node (nx, ny)
-// covers texels [nx 2^L, (nx+1) 2^L) x [ny 2^L, (ny+1) 2^L) clipped to the map.
+// Bounds of S over power-of-two blocks of texels: level L, node (nx, ny) covers texels
+// [nx 2^L, (nx+1) 2^L) x [ny 2^L, (ny+1) 2^L) clipped to the map. Per node: the maximum of
+// the apex heights, and (levels >= 1) a plane above S over the node,
+// S(y) <= a + g . (y - c), c the node's centre, g roughly S's mean gradient there. The max
+// bounds a node by its nearest distance, a first-order bound that a smooth surface hugging
+// the cone never meets; the plane bounds S - psi dist(y, F) to second order (exact on a
+// plane), which is what prunes the wide regions near a cone's tangency.
 struct MaxTree {
   std::vector<int> w, h;
   std::vector<std::vector<float>> level;
-  float at(int l, int x, int y) const {
-    return level[static_cast<size_t>(l)][static_cast<size_t>(y) * static_cast<size_t>(w[static_cast<size_t>(l)]) + static_cast<size_t>(x)];
+  std::vector<std::vector<float>> plane;  // per node a, gx, gy (level 0 unused)
+  size_t index(int l, int x, int y) const {
+    return static_cast<size_t>(y) * static_cast<size_t>(w[static_cast<size_t>(l)]) + static_cast<size_t>(x);
   }
+  float at(int l, int x, int y) const { return level[static_cast<size_t>(l)][index(l, x, y)]; }
 };
 
-MaxTree max_tree(std::vector<float> top, int width, int height) {
+// A float not below v.
+float up(double v) {
+  float f = static_cast<float>(v);
+  if (static_cast<double>(f) < v) f = std::nextafter(f, std::numeric_limits<float>::infinity());
+  return f;
+}
+
+// The plane of texel (i, j): g from its 3 x 3 grid values (mean of the differences across
+// it), a exact (S minus an affine function is bilinear on each piece, so the 9 grid points
+// hold its maximum).
+void texel_plane(const HalfGrid& grid, int i, int j, float* q) {
+  double gx = 0, gy = 0;
+  for (int k = 0; k <= 2; ++k) {
+    gx += (grid.at(2 * i + 2, 2 * j + k) - grid.at(2 * i, 2 * j + k)) / 3.0;
+    gy += (grid.at(2 * i + k, 2 * j + 2) - grid.at(2 * i + k, 2 * j)) / 3.0;
+  }
+  const float fx = static_cast<float>(gx), fy = static_cast<float>(gy);
+  double a = -kInf;
+  for (int b = 0; b <= 2; ++b)
+    for (int c = 0; c <= 2; ++c) a = std::max(a, grid.at(2 * i + c, 2 * j + b) - fx * (0.5 * c - 0.5) - fy * (0.5 * b - 0.5));
+  q[0] = up(a);
+  q[1] = fx;
+  q[2] = fy;
+}
+
+MaxTree max_tree(std::vector<float> top, const HalfGrid& grid, int width, int height) {
   MaxTree t;
   t.w.push_back(width);
   t.h.push_back(height);
   t.level.push_back(std::move(top));
-  while (t.w.back() > 1 || t.h.back() > 1) {
-    const int fw = t.w.back(), fh = t.h.back(), cw = (fw + 1) / 2, ch = (fh + 1) / 2;
-    std::vector<float> c(static_cast<size_t>(cw) * static_cast<size_t>(ch));
-    const std::vector<float>& fine = t.level.back();
-    for (int y = 0; y < ch; ++y)
-      for (int x = 0; x < cw; ++x) {
-        float m = -1.0f;
-        for (int yy = 2 * y; yy <= std::min(2 * y + 1, fh - 1); ++yy)
-          for (int xx = 2 * x; xx <= std::min(2 * x + 1, fw - 1); ++xx)
-            m = std::max(m, fine[static_cast<size_t>(yy) * static_cast<size_t>(fw) + static_cast<size_t>(xx)]);
-        c[static_cast<size_t>(y) * static_cast<size_t>(cw) + static_cast<size_t>(x)] = m;
+  t.plane.emplace_back();
+  // Level-0 planes (texel_plane), kept only to build level 1; the search recomputes them.
+  std::vector<float> p0(static_cast<size_t>(width) * static_cast<size_t>(height) * 3);
+  tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
+    for (int j = rows.begin(); j < rows.end(); ++j)
+      for (int i = 0; i < width; ++i) {
+        texel_plane(grid, i, j, &p0[(static_cast<size_t>(j) * static_cast<size_t>(width) + static_cast<size_t>(i)) * 3]);
       }
+  });
+  const std::vector<float>* fine_plane = &p0;
+  while (t.w.back() > 1 || t.h.back() > 1) {
+    const int l = static_cast<int>(t.w.size()) - 1;  // the finer level
+    const int fw = t.w.back(), fh = t.h.back(), cw = (fw + 1) / 2, ch = (fh + 1) / 2;
+    const double fs = std::ldexp(1.0, l), cs = 2 * fs;  // node sizes in texels
+    std::vector<float> c(static_cast<size_t>(cw) * static_cast<size_t>(ch));
+    std::vector<float> cp(c.size() * 3);
+    const std::vector<float>& fine = t.level.back();
+    auto rect_of = [&](double size, int x, int y, double& x0, double& y0, double& x1, double& y1) {
+      x0 = x * size;
+      y0 = y * size;
+      x1 = std::min((x + 1) * size, static_cast<double>(width));
+      y1 = std::min((y + 1) * size, static_cast<double>(height));
+    };
+    tbb::parallel_for(tbb::blocked_range<int>(0, ch), [&](const tbb::blocked_range<int>& rows) {
+      for (int y = rows.begin(); y < rows.end(); ++y)
+        for (int x = 0; x < cw; ++x) {
+          float m = -1.0f;
+          double gx = 0, gy = 0, weight = 0;
+          for (int yy = 2 * y; yy <= std::min(2 * y + 1, fh - 1); ++yy)
+            for (int xx = 2 * x; xx <= std::min(2 * x + 1, fw - 1); ++xx) {
+              const size_t k = static_cast<size_t>(yy) * static_cast<size_t>(fw) + static_cast<size_t>(xx);
+              m = std::max(m, fine[k]);
+              double x0, y0, x1, y1;
+              rect_of(fs, xx, yy, x0, y0, x1, y1);
+              const double area = (x1 - x0) * (y1 - y0);
+              gx += area * (*fine_plane)[k * 3 + 1];
+              gy += area * (*fine_plane)[k * 3 + 2];
+              weight += area;
+            }
+          gx /= weight;
+          gy /= weight;
+          const float fx = static_cast<float>(gx), fy = static_cast<float>(gy);
+          double nx0, ny0, nx1, ny1;
+          rect_of(cs, x, y, nx0, ny0, nx1, ny1);
+          const double ncx = 0.5 * (nx0 + nx1), ncy = 0.5 * (ny0 + ny1);
+          // On a child, S - g_N . (y - c_N) <= a_C + g_C . (y - c_C) - g_N . (y - c_N): affine,
+          // so the child's corners bound it.
+          double a = -kInf;
+          for (int yy = 2 * y; yy <= std::min(2 * y + 1, fh - 1); ++yy)
+            for (int xx = 2 * x; xx <= std::min(2 * x + 1, fw - 1); ++xx) {
+              const size_t k = static_cast<size_t>(yy) * static_cast<size_t>(fw) + static_cast<size_t>(xx);
+              const double ca = (*fine_plane)[k * 3], cgx = (*fine_plane)[k * 3 + 1], cgy = (*fine_plane)[k * 3 + 2];
+              double x0, y0, x1, y1;
+              rect_of(fs, xx, yy, x0, y0, x1, y1);
+              const double ccx = 0.5 * (x0 + x1), ccy = 0.5 * (y0 + y1);
+              for (double px : {x0, x1})
+                for (double py : {y0, y1})
+                  a = std::max(a, ca + cgx * (px - ccx) + cgy * (py - ccy) - fx * (px - ncx) - fy * (py - ncy));
+            }
+          const size_t n = static_cast<size_t>(y) * static_cast<size_t>(cw) + static_cast<size_t>(x);
+          c[n] = m;
+          // Never above the node's maximum where that is lower (a flat top): keep both.
+          cp[n * 3] = up(a);
+          cp[n * 3 + 1] = fx;
+          cp[n * 3 + 2] = fy;
+        }
+    });
     t.w.push_back(cw);
     t.h.push_back(ch);
     t.level.push_back(std::move(c));
+    t.plane.push_back(std::move(cp));
+    fine_plane = &t.plane.back();
   }
   return t;
+}
+
+// Upper bound of S(y) - psi dist(y, F) - T over the rectangle r (disjoint from F's
+// interior), from the node's plane: the exact maximum of h(y) = plane(y) - psi dist(y, F).
+// h is concave (affine minus a convex distance), so its maximum over r lies on r's boundary
+// (an interior stationary point needs |g| = psi, where h is constant along a ray that
+// reaches the boundary anyway). Along an edge, dist is |x - e| beside F or
+// sqrt((x - e)^2 + k^2) off its corner: the maximum of gx x - psi sqrt((x - e)^2 + k^2) is at
+// x - e = k r / sqrt(1 - r^2), r = gx / psi, when |r| < 1; else at an end.
+double plane_excess(const float* plane, const Rect& r, const Rect& f, double top, double psi) {
+  const double a = plane[0], gx = plane[1], gy = plane[2];
+  const double ncx = 0.5 * (r.x0 + r.x1), ncy = 0.5 * (r.y0 + r.y1);
+  auto h = [&](double x, double y) {
+    const double dx = std::max({f.x0 - x, 0.0, x - f.x1}), dy = std::max({f.y0 - y, 0.0, y - f.y1});
+    return a + gx * (x - ncx) + gy * (y - ncy) - psi * length(dx, dy);
+  };
+  double best = -kInf;
+  // One edge: coordinate s in [s0, s1] varies, the other is fixed at `fixed`; g the plane's
+  // slope along s; [e0, e1] F's extent along s; k the gap to F across the edge.
+  auto edge = [&](double s0, double s1, double e0, double e1, double k, double slope, auto&& point) {
+    best = std::max({best, point(s0), point(s1)});
+    if (!(psi > 0) || k <= 0) return;  // piecewise linear along the edge: ends and F's lines
+    const double ratio = slope / psi;
+    if (std::abs(ratio) >= 1) return;
+    const double offset = k * ratio / std::sqrt(1 - ratio * ratio);
+    for (double e : {e0, e1}) {
+      const double s = e + offset;
+      if ((e == e0 && s <= e0) || (e == e1 && s >= e1)) best = std::max(best, point(std::clamp(s, s0, s1)));
+    }
+  };
+  for (double y : {r.y0, r.y1}) {
+    const double k = std::max({f.y0 - y, 0.0, y - f.y1});
+    for (double e : {f.x0, f.x1})
+      if (e > r.x0 && e < r.x1) best = std::max(best, h(e, y));
+    edge(r.x0, r.x1, f.x0, f.x1, k, gx, [&](double x) { return h(x, y); });
+  }
+  for (double x : {r.x0, r.x1}) {
+    const double k = std::max({f.x0 - x, 0.0, x - f.x1});
+    for (double e : {f.y0, f.y1})
+      if (e > r.y0 && e < r.y1) best = std::max(best, h(x, e));
+    edge(r.y0, r.y1, f.y0, f.y1, k, gy, [&](double y) { return h(x, y); });
+  }
+  return best - top;
 }
 
 // Stored ratios round toward zero (a narrower cone is still safe); ratios are >= 0 and
@@ -310,7 +470,7 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
         for (int a = 2 * i; a <= 2 * i + 2; ++a) m = std::max(m, g.at(a, b));
       top[static_cast<size_t>(j) * static_cast<size_t>(w) + static_cast<size_t>(i)] = m;
     }
-  const MaxTree tree = max_tree(top, w, h);
+  const MaxTree tree = max_tree(top, g, w, h);
   const int root = static_cast<int>(tree.level.size()) - 1;
   const double global_max = tree.at(root, 0, 0);
   const bool relaxed = o.kind == ConeKind::relaxed;
@@ -321,11 +481,15 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
       int level, x, y;
     };
     std::vector<Node> stack;
-    for (int j = rows.begin(); j < rows.end(); ++j)
+    for (int j = rows.begin(); j < rows.end(); ++j) {
+      // Seeds chain along a row only, so results never depend on how rows are split among
+      // threads.
+      ConeSearch::Point previous;
       for (int i = 0; i < w; ++i) {
         const double t = top[static_cast<size_t>(j) * static_cast<size_t>(w) + static_cast<size_t>(i)];
         const Rect f{static_cast<double>(i), static_cast<double>(j), i + 1.0, j + 1.0};
         ConeSearch search(f, t, relaxed, o.tolerance);
+        search.seed(previous);  // the steepest point of the texel before it in this row
         // Depth-first over one copy of the map shifted by (ox, oy) pixels, nearest child
         // first; a node whose maximum cannot beat the slope attained so far is skipped.
         auto visit = [&](double ox, double oy) {
@@ -342,7 +506,23 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
                          oy + std::min(static_cast<double>(n.y + 1) * size, static_cast<double>(h))};
             const double d = rect_distance(r, f);
             if (d > 0 && (m - t) / d <= search.psi) continue;
+            // Under the cone of the slope found: nothing to gain. Under the cone of that slope
+            // widened by the tolerance: the node is dismissed and the widened slope kept as
+            // the bound (the stored cone may be that much narrower, never wider).
+            auto under = [&](const float* plane) {
+              if (plane_excess(plane, r, f, t, search.psi) <= 0) return true;
+              const double widened = search.psi * (1 + o.tolerance);
+              if (search.psi > 0 && plane_excess(plane, r, f, t, widened) <= 0) {
+                search.bound = std::max(search.bound, widened);
+                return true;
+              }
+              return false;
+            };
+            if (d > 0 && n.level > 0 && under(&tree.plane[static_cast<size_t>(n.level)][tree.index(n.level, n.x, n.y) * 3])) continue;
             if (n.level == 0) {
+              std::array<float, 3> plane{};
+              texel_plane(g, n.x, n.y, plane.data());
+              if (d > 0 && under(plane.data())) continue;
               for (int b = 2 * n.y; b <= 2 * n.y + 1; ++b)
                 for (int a = 2 * n.x; a <= 2 * n.x + 1; ++a)
                   search.piece(Piece(ox + 0.5 * a, oy + 0.5 * b, g.at(a, b), g.at(a + 1, b), g.at(a, b + 1), g.at(a + 1, b + 1)));
@@ -380,12 +560,14 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
               visit(static_cast<double>(a) * w, static_cast<double>(b) * h);
             }
         }
+        previous = search.best;
         const double psi = std::max(search.psi, search.bound);
         const double ratio = psi > 0 ? 1.0 / (psi * w) : kInf;  // texels -> units of u
         out.at(i, j, 0) = field.height.at(i, j);
         out.at(i, j, 1) = round_down(std::min(ratio, static_cast<double>(kConeRatioCap)), o.half);
         out.at(i, j, 2) = o.half ? round_up_half(static_cast<float>(t)) : static_cast<float>(t);
       }
+    }
   });
 
   out.metadata = height_field_metadata(field);
