@@ -55,7 +55,7 @@ TEST(Cli, HelpVersionAndMethodList) {
   EXPECT_NE(version.out.find("meso "), std::string::npos);
   const Result methods = run("preview --list-methods");
   EXPECT_EQ(methods.code, 0);
-  EXPECT_EQ(methods.out, "bump\nparallax\noffset-limited\nslope\niterative-parallax\nsteep\nrelief\npom\nsphere-tracing\n");
+  EXPECT_EQ(methods.out, "bump\nparallax\noffset-limited\nslope\niterative-parallax\nsteep\nrelief\npom\ncone\nrelaxed-cone\nsphere-tracing\n");
 }
 
 TEST(Cli, BadUsageExitsTwo) {

@@ -21,7 +21,7 @@ void add_preview(CLI::App& app, Context& ctx) {
   CLI::App* sub = app.add_subcommand("preview", "Render the base mesh with its baked maps (window, or headless to PNG)");
   sub->add_option("base", args->base, "Base mesh with UVs");
   sub->add_option("--maps", args->maps, "Folder written by meso bake (displacement.exr, normal_ts.png)");
-  sub->add_option("--streams", args->streams, "Folder of meso streams outputs (sdf.exr for sphere-tracing); default: the --maps folder");
+  sub->add_option("--streams", args->streams, "Folder of meso streams outputs (sdf.exr for sphere-tracing, cone.exr for cone, relaxed-cone.exr for relaxed-cone); default: the --maps folder");
   sub->add_option("--method", args->options.method, "Displacement method (see --list-methods)")
       ->check(CLI::IsMember(preview_methods()));
   sub->add_flag("--list-methods", args->list, "Print the method names, one per line, and exit");
@@ -59,19 +59,25 @@ void add_preview(CLI::App& app, Context& ctx) {
       if (maps.normal_ts.channels < 3) throw InputError((dir / "normal_ts.png").string(), "needs 3 channels (a tangent-space normal map)");
       // Streams: those the method needs must be there; in a window, any that are there are
       // loaded so that every method can be switched to.
-      const std::filesystem::path sdf_file = std::filesystem::path(args->streams.empty() ? args->maps : args->streams) / "sdf.exr";
-      if (required_stream(o.method) == "sdf.exr" && !std::filesystem::exists(sdf_file))
-        throw InputError(sdf_file.string(), "missing: method " + o.method + " needs it (meso streams sdf " +
-                                                (dir / "displacement.exr").string() + " -o " + sdf_file.string() + ")");
-      const bool needed = required_stream(o.method) == "sdf.exr";
-      if (needed || (!args->headless && std::filesystem::exists(sdf_file))) {
+      const std::filesystem::path streams_dir(args->streams.empty() ? args->maps : args->streams);
+      for (const std::string& method : preview_methods()) {
+        const std::string stream = required_stream(method);
+        if (stream.empty()) continue;
+        const std::filesystem::path file = streams_dir / stream;
+        const std::string producer = stream.substr(0, stream.size() - 4);  // "sdf", "cone", "relaxed-cone"
+        const bool needed = o.method == method;
+        if (needed && !std::filesystem::exists(file))
+          throw InputError(file.string(), "missing: method " + o.method + " needs it (meso streams " + producer + " " +
+                                              (dir / "displacement.exr").string() + " -o " + file.string() + ")");
+        if (!needed && (args->headless || !std::filesystem::exists(file))) continue;
+        Image& slot = *stream_for(maps, method);
         try {
-          maps.sdf = read_image(sdf_file);
-          check_sdf_matches(maps.sdf, maps.displacement, sdf_file.string());
+          slot = read_image(file);
+          check_stream_matches(method, slot, maps.displacement, file.string());
         } catch (const InputError& e) {
           if (needed) throw;
-          warn(ctx.globals, std::string(e.what()) + " (sphere-tracing unavailable)");  // window only
-          maps.sdf = Image();
+          warn(ctx.globals, std::string(e.what()) + " (" + method + " unavailable)");  // window only
+          slot = Image();
         }
       }
       if (!args->headless) {

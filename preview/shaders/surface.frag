@@ -2,7 +2,7 @@
 // Per-pixel displacement on the base mesh, the methods of the survey (Szirmay-Kalos &
 // Umenhoffer) by section: bump 4.1.1 (normal map only), parallax 4.1.2, offset-limited 4.1.3,
 // slope 4.1.4, iterative-parallax 4.2.1, steep 4.3.1, relief 4.4.1, pom 4.4.2,
-// sphere-tracing 4.3.4.
+// cone 4.3.5, relaxed-cone 4.4.3, sphere-tracing 4.3.4.
 // Heights are in object units along the base normal, positive outward (meso bake's
 // displacement.exr), in [u_h_min, u_h_max]. The ray is expressed in (u, v, h) coordinates:
 // per unit of object-space length it advances dot(V,t)/|dp/du| in u, dot(V,b)/|dp/dv| in v
@@ -30,17 +30,218 @@ uniform float u_sdf_relief;   // height range in units of u
 uniform float u_sdf_aspect;   // H / W of the height map
 uniform float u_sdf_epsilon;  // stop distance, units of u
 uniform float u_sdf_margin;   // one voxel diagonal, units of u
+uniform sampler2D u_cone;     // meso streams cone / relaxed-cone, level 0 (bound when used), read
+                              // with texelFetch only: R = texel height, G = cone ratio (units of u
+                              // per unit normalised height), B = apex height (normalised)
+uniform float u_cone_scale;   // object height = bias + scale * normalised height
+uniform float u_cone_bias;
+uniform int u_cone_wrap;      // 1: border wrap (the map tiles), 0: clamp
 
 // Method numbers: the order of preview_methods() in renderer.cpp.
 const int kBump = 0, kParallax = 1, kOffsetLimited = 2, kSlope = 3, kIterativeParallax = 4, kSteep = 5,
-          kRelief = 6, kPom = 7, kSphereTracing = 8;
+          kRelief = 6, kPom = 7, kCone = 8, kRelaxedCone = 9, kSphereTracing = 10;
 const int kReliefBinarySteps = 8;
+const int kConeBisectionSteps = 24;  // relaxed cones: halvings of the step that crossed the surface
+const float kConeFar = 1e30;
 
 layout(location = 0) out vec4 out_color;
 
 // Explicit level of detail: loops have no implicit derivatives (divergent control flow).
 float height_at(vec2 uv) { return textureLod(u_height, uv, 0.0).r; }
 vec3 normal_ts_at(vec2 uv) { return textureLod(u_normal, uv, 0.0).rgb * 2.0 - 1.0; }
+
+// ---- Cone stepping (streams/cone_map.hpp; the algorithm of trace_cone_map and
+// intersect_footprint in streams/src/cone_map.cpp). Pixel units as the streams use them:
+// x = u W, y = (1 - v) H (rows from the top, texel (i, j) covers [i, i+1] x [j, j+1]),
+// z = normalised height in [0, 1].
+
+// k modulo n, for any sign of k (GLSL's % is undefined for negative operands).
+int cone_wrap_index(int k, int n) {
+  if (k < 0) k += n * ((n - 1 - k) / n);
+  return k % n;
+}
+
+// Texel (i, j) of the cone map (j from the top row) under the height field's border rule.
+vec3 cone_texel(ivec2 p) {
+  ivec2 n = textureSize(u_cone, 0);
+  if (u_cone_wrap != 0) p = ivec2(cone_wrap_index(p.x, n.x), cone_wrap_index(p.y, n.y));
+  else p = clamp(p, ivec2(0), n - 1);
+  return texelFetch(u_cone, ivec2(p.x, n.y - 1 - p.y), 0).rgb;  // GL rows are bottom first
+}
+
+// The surface S at pixel position q: bilinear through the texel centres (GL_LINEAR's
+// surface, HeightField::bilinear), computed from fetched texels so that it is the exact
+// surface the cones were built for, free of the sampler's reduced weight precision.
+float cone_surface(vec2 q) {
+  vec2 f = q - 0.5;
+  vec2 f0 = floor(f);
+  vec2 w = f - f0;
+  ivec2 i = ivec2(f0);
+  float a = cone_texel(i).r, b = cone_texel(i + ivec2(1, 0)).r;
+  float c = cone_texel(i + ivec2(0, 1)).r, d = cone_texel(i + ivec2(1, 1)).r;
+  return (a * (1.0 - w.x) + b * w.x) * (1.0 - w.y) + (c * (1.0 - w.x) + d * w.x) * w.y;
+}
+
+// The texel a point belongs to: the one it is in, or on an edge the one ahead along d.
+ivec2 cone_cell(vec2 p, vec2 d) {
+  vec2 f = floor(p);
+  ivec2 c = ivec2(f);
+  if (p.x == f.x && d.x < 0.0) c.x -= 1;
+  if (p.y == f.y && d.y < 0.0) c.y -= 1;
+  return c;
+}
+
+// The first intersection of the ray o + t d with S over texel `cell`'s footprint for t in
+// [t0, t1] (the ray stays over the footprint there). The lines x = i + 1/2 and y = j + 1/2
+// split the stretch into up to three pieces over each of which S is one bilinear
+// polynomial (corners on the half-texel grid), so S(ray(t)) - z(t) is a quadratic in t.
+bool cone_footprint_hit(ivec2 cell, vec3 o, vec3 d, float t0, float t1, out float t_hit) {
+  t_hit = t1;
+  float cx = kConeFar, cy = kConeFar;
+  if (d.x != 0.0) cx = (float(cell.x) + 0.5 - o.x) / d.x;
+  if (d.y != 0.0) cy = (float(cell.y) + 0.5 - o.y) / d.y;
+  float cut[4] = float[4](t0, min(cx, cy), max(cx, cy), t1);
+  for (int k = 1; k <= 2; ++k) cut[k] = clamp(cut[k], t0, t1);
+  for (int k = 0; k < 3; ++k) {
+    float ta = cut[k], tb = cut[k + 1];
+    if (k > 0 && !(tb > ta)) continue;  // empty stretch (the first one is kept: t0 may equal t1)
+    float tm = 0.5 * (ta + tb);
+    vec2 m = clamp(o.xy + tm * d.xy, vec2(cell), vec2(cell) + 1.0);
+    vec2 pc = vec2(m.x < float(cell.x) + 0.5 ? float(cell.x) : float(cell.x) + 0.5,
+                   m.y < float(cell.y) + 0.5 ? float(cell.y) : float(cell.y) + 0.5);
+    float v00 = cone_surface(pc), v10 = cone_surface(pc + vec2(0.5, 0.0));
+    float v01 = cone_surface(pc + vec2(0.0, 0.5)), v11 = cone_surface(pc + vec2(0.5, 0.5));
+    float pa = v10 - v00, pb = v01 - v00, pe = v00 - v10 - v01 + v11;
+    // Local coordinates (s, r) in [0, 1]^2 over the piece; the parameter is tau = t - ta,
+    // measured from the stretch's start to keep the coefficients small.
+    vec3 a3 = o + ta * d;
+    float s0 = 2.0 * (a3.x - pc.x), sd = 2.0 * d.x, r0 = 2.0 * (a3.y - pc.y), rd = 2.0 * d.y;
+    float A = pe * sd * rd;
+    float B = pa * sd + pb * rd + pe * (s0 * rd + r0 * sd) - d.z;
+    float C = v00 + pa * s0 + pb * r0 + pe * s0 * r0 - a3.z;
+    float L = tb - ta;
+    if (C >= 0.0) {
+      t_hit = ta;
+      return true;
+    }
+    float best = kConeFar;
+    if (abs(A) * L * L <= 1e-6 * (abs(A) * L * L + abs(B) * L + abs(C))) {
+      if (B != 0.0) best = -C / B;
+    } else {
+      float disc = B * B - 4.0 * A * C;
+      if (disc >= 0.0) {
+        float q = -0.5 * (B + (B >= 0.0 ? 1.0 : -1.0) * sqrt(disc));
+        float r1 = q / A, r2 = q != 0.0 ? C / q : kConeFar;
+        if (r1 >= 0.0 && r1 <= L) best = min(best, r1);
+        if (r2 >= 0.0 && r2 <= L) best = min(best, r2);
+      }
+    }
+    if (best >= 0.0 && best <= L) {
+      t_hit = ta + best;
+      return true;
+    }
+    if ((A * L + B) * L + C >= 0.0) {
+      // Rounding hid the root: bisect the sign change.
+      float lo = 0.0, hi = L;
+      for (int it = 0; it < kConeBisectionSteps; ++it) {
+        float mid = 0.5 * (lo + hi);
+        if ((A * mid + B) * mid + C >= 0.0) hi = mid;
+        else lo = mid;
+      }
+      t_hit = ta + hi;
+      return true;
+    }
+  }
+  return false;
+}
+
+// Cone stepping (4.3.5) and relaxed cone stepping (4.4.3) from where the view ray enters the
+// top of the height volume. Over texel p at height z >= T_p (its apex) the cone of apex
+// (x, T_p) holds no surface above the ray's next stretch, so the ray advances to the cone's
+// boundary; when that step would not leave p's footprint, the ray is intersected exactly with
+// S over the footprint and moves on to the next texel. A relaxed cone's step may cross the
+// surface, at most once: its end below the surface starts a bisection. Returns the visible
+// point's s (object length along the view ray from the base point).
+float cone_trace(vec3 dir, bool relaxed) {
+  if (!(u_cone_scale > 0.0)) return u_cone_bias / dir.z;  // a flat map: the plane h = bias
+  ivec2 size = textureSize(u_cone, 0);
+  vec2 n = vec2(size);
+  float s_top = (u_cone_bias + u_cone_scale) / dir.z;  // where h = bias + scale (z = 1)
+  vec2 uv_top = v_uv + dir.xy * s_top;
+  // The ray o + t d, t = s - s_top, in pixel units and normalised height.
+  vec3 o = vec3(uv_top.x * n.x, (1.0 - uv_top.y) * n.y, 1.0);
+  vec3 d = vec3(dir.x * n.x, -dir.y * n.y, dir.z / u_cone_scale);
+  float horizontal = length(d.xy);
+  float t_floor = 1.0 / -d.z;  // z = 0, below every point of the surface
+  float t = 0.0;
+  float t_out = kConeFar;  // clamp: where the ray leaves [0, W] x [0, H]
+  bool clamped = u_cone_wrap == 0;
+  if (clamped) {
+    // The cones know nothing beyond the map: start where the ray comes over it (the top
+    // entry point may lie outside) and stop where it leaves it, keeping that point.
+    float t_in = 0.0;
+    for (int k = 0; k < 2; ++k) {
+      if (d[k] != 0.0) {
+        float ta = -o[k] / d[k], tb = (n[k] - o[k]) / d[k];
+        t_in = max(t_in, min(ta, tb));
+        t_out = min(t_out, max(ta, tb));
+      } else if (o[k] < 0.0 || o[k] > n[k]) {
+        t_out = -1.0;
+      }
+    }
+    if (t_in > min(t_out, t_floor)) return s_top;  // never over the map above the floor
+    t = t_in;
+  }
+  ivec2 cell = cone_cell(o.xy + t * d.xy, d.xy);
+  if (clamped) cell = clamp(cell, ivec2(0), size - 1);
+  for (int i = 0; i < max(u_iterations, 1); ++i) {
+    if (clamped && (any(lessThan(cell, ivec2(0))) || any(greaterThanEqual(cell, size)))) break;  // left the map
+    vec3 p = o + t * d;
+    vec3 c = cone_texel(cell);
+    float ratio = c.g * n.x, apex = c.b;  // ratio in texels per unit height
+    float tx = d.x > 0.0 ? (float(cell.x + 1) - o.x) / d.x : (d.x < 0.0 ? (float(cell.x) - o.x) / d.x : kConeFar);
+    float ty = d.y > 0.0 ? (float(cell.y + 1) - o.y) / d.y : (d.y < 0.0 ? (float(cell.y) - o.y) / d.y : kConeFar);
+    float t_exit = max(min(min(tx, ty), t_floor), t);
+    float den = horizontal + ratio * -d.z;  // 0 only for a flat cone seen straight on
+    float step = p.z >= apex && den > 0.0 ? ratio * (p.z - apex) / den : 0.0;
+    if (t + step < t_exit || t_exit <= t) {
+      // The cone does not reach beyond the footprint: intersect S over it exactly.
+      float t_hit;
+      if (cone_footprint_hit(cell, o, d, t, t_exit, t_hit)) {
+        t = t_hit;
+        break;
+      }
+      if (t_exit >= t_floor) {
+        t = t_floor;
+        break;
+      }
+      t = t_exit;
+      // The next texel along the ray: across the edge (or corner) the ray left by.
+      if (tx <= t_exit) cell.x += d.x > 0.0 ? 1 : -1;
+      if (ty <= t_exit) cell.y += d.y > 0.0 ? 1 : -1;
+      continue;
+    }
+    float tq = min(t + step, min(t_floor, t_out));
+    vec3 q = o + tq * d;
+    if (relaxed && cone_surface(q.xy) >= q.z) {
+      // The step crossed the surface once (the relaxed cone's guarantee): bisect it.
+      float lo = t, hi = tq;
+      for (int it = 0; it < kConeBisectionSteps; ++it) {
+        float mid = 0.5 * (lo + hi);
+        vec3 r = o + mid * d;
+        if (cone_surface(r.xy) >= r.z) hi = mid;
+        else lo = mid;
+      }
+      t = hi;
+      break;
+    }
+    t = tq;
+    if (tq >= t_out) break;  // left the map (clamp)
+    cell = cone_cell(q.xy, d.xy);
+    if (clamped) cell = clamp(cell, ivec2(0), size - 1);
+  }
+  return s_top + t;
+}
 
 void main() {
   vec3 n = v_normal;
@@ -125,6 +326,8 @@ void main() {
       }
     }
     uv = v_uv + dir.xy * s_hit;
+  } else if ((u_method == kCone || u_method == kRelaxedCone) && facing) {
+    uv = v_uv + dir.xy * cone_trace(dir, u_method == kRelaxedCone);
   } else if (u_method == kSphereTracing && facing) {
     // Section 4.3.4 on meso's distance field (streams/distance_field.hpp): in its space the
     // point is (u, v H/W, normalised height * relief), distances in units of u. March from the

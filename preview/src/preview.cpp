@@ -20,12 +20,18 @@ namespace {
 void check_maps(const PreviewMaps& maps, const std::string& method) {
   if (maps.displacement.empty() || maps.normal_ts.empty()) throw std::logic_error("preview: maps are empty");
   method_index(method);  // unknown method: UsageError before any OpenGL work
-  if (required_stream(method) == "sdf.exr" && maps.sdf.empty())
-    throw UsageError("method " + method + " needs the distance field sdf.exr (meso streams sdf, then --streams DIR)");
+  const Image* stream = stream_for(maps, method);
+  if (stream && stream->empty()) {
+    const std::string file = required_stream(method);
+    const std::string what = method == "sphere-tracing" ? "the distance field " : "the cone map ";
+    throw UsageError("method " + method + " needs " + what + file + " (meso streams " + file.substr(0, file.size() - 4) +
+                     ", then --streams DIR)");
+  }
 }
 
 bool streams_available(const PreviewMaps& maps, const std::string& method) {
-  return required_stream(method).empty() || !maps.sdf.empty();
+  const Image* stream = stream_for(maps, method);
+  return !stream || !stream->empty();
 }
 
 // An OpenGL 4.5 core context without any window system: EGL on Mesa's surfaceless platform
@@ -158,14 +164,26 @@ void run_window(const Mesh& base, const PreviewMaps& maps, const PreviewOptions&
     auto* s = static_cast<WindowState*>(glfwGetWindowUserPointer(w));
     s->options.camera.zoom = std::clamp(s->options.camera.zoom * static_cast<float>(std::pow(1.1, dy)), 0.1f, 50.0f);
   });
-  glfwSetKeyCallback(window, [](GLFWwindow* w, int key, int, int action, int) {
+  glfwSetKeyCallback(window, [](GLFWwindow* w, int key, int, int action, int mods) {
     if (action == GLFW_RELEASE) return;
     auto* s = static_cast<WindowState*>(glfwGetWindowUserPointer(w));
     const auto& methods = preview_methods();
-    // 1-9 choose a method (those whose streams were not given are skipped).
-    if (key >= GLFW_KEY_1 && key <= GLFW_KEY_9 && static_cast<size_t>(key - GLFW_KEY_1) < methods.size() &&
-        streams_available(*s->maps, methods[static_cast<size_t>(key - GLFW_KEY_1)]))
-      s->options.method = methods[static_cast<size_t>(key - GLFW_KEY_1)];
+    // 1-9 and 0 choose one of the first ten methods, Tab (Shift+Tab) the next (previous)
+    // one; methods whose streams were not given are skipped.
+    int pick = -1;
+    if (key >= GLFW_KEY_1 && key <= GLFW_KEY_9) pick = key - GLFW_KEY_1;
+    if (key == GLFW_KEY_0) pick = 9;
+    if (pick >= 0 && static_cast<size_t>(pick) < methods.size() && streams_available(*s->maps, methods[static_cast<size_t>(pick)]))
+      s->options.method = methods[static_cast<size_t>(pick)];
+    if (key == GLFW_KEY_TAB) {
+      const int count = static_cast<int>(methods.size()), delta = (mods & GLFW_MOD_SHIFT) ? count - 1 : 1;
+      int k = method_index(s->options.method);
+      for (int n = 0; n < count; ++n) {
+        k = (k + delta) % count;
+        if (streams_available(*s->maps, methods[static_cast<size_t>(k)])) break;
+      }
+      s->options.method = methods[static_cast<size_t>(k)];
+    }
     if (key == GLFW_KEY_EQUAL || key == GLFW_KEY_KP_ADD) s->options.iterations = std::min(s->options.iterations * 2, 1024);
     if (key == GLFW_KEY_MINUS || key == GLFW_KEY_KP_SUBTRACT) s->options.iterations = std::max(s->options.iterations / 2, 1);
     if (key == GLFW_KEY_ESCAPE || key == GLFW_KEY_Q) glfwSetWindowShouldClose(w, GLFW_TRUE);

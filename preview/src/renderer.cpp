@@ -18,39 +18,88 @@ extern const char* const surface_frag;
 
 const std::vector<std::string>& preview_methods() {
   // The order is the shader's method numbering (surface.frag).
-  static const std::vector<std::string> names{"bump",  "parallax", "offset-limited", "slope",         "iterative-parallax",
-                                              "steep", "relief",   "pom",            "sphere-tracing"};
+  static const std::vector<std::string> names{"bump",   "parallax", "offset-limited", "slope",         "iterative-parallax", "steep",
+                                              "relief", "pom",      "cone",           "relaxed-cone", "sphere-tracing"};
   return names;
 }
 
 namespace {
-float sdf_number(const Image& sdf, const char* key, const std::string& name) {
-  const auto it = sdf.metadata.find(key);
-  if (it == sdf.metadata.end()) throw InputError(name, std::string("lacks the meso:") + key + " attribute of meso streams sdf");
+// A numeric header attribute of a stream file written by `producer`.
+float stream_number(const Image& stream, const char* key, const std::string& name, const char* producer = "meso streams sdf") {
+  const auto it = stream.metadata.find(key);
+  if (it == stream.metadata.end()) throw InputError(name, std::string("lacks the meso:") + key + " attribute of " + producer);
   if (const int* i = std::get_if<int>(&it->second)) return static_cast<float>(*i);
   if (const float* f = std::get_if<float>(&it->second)) return *f;
   throw InputError(name, std::string("meso:") + key + " is not a number");
 }
-}  // namespace
 
-void check_sdf_matches(const Image& sdf, const Image& displacement, const std::string& name) {
-  const int depth = static_cast<int>(sdf_number(sdf, "depth", name));
-  if (depth < 1 || sdf.height % depth != 0 || sdf.width != displacement.width || sdf.height / depth != displacement.height)
-    throw InputError(name, "its size does not match displacement.exr (made from another height map?)");
-  // The height range it was normalised with must be the displacement's own.
+// The height range a stream was normalised with must be the displacement's own.
+void check_height_range(const Image& stream, const Image& displacement, const std::string& name, const char* producer) {
   float lo = displacement.pixels[0], hi = lo;
   for (size_t i = 0; i < displacement.texel_count(); ++i) {
     const float v = displacement.pixels[i * static_cast<size_t>(displacement.channels)];
     lo = std::min(lo, v);
     hi = std::max(hi, v);
   }
-  const float bias = sdf_number(sdf, "height_bias", name), scale = sdf_number(sdf, "height_scale", name);
+  const float bias = stream_number(stream, "height_bias", name, producer), scale = stream_number(stream, "height_scale", name, producer);
   const float tol = 1e-6f * std::max({std::abs(lo), std::abs(hi), 1e-30f});
   if (std::abs(bias - lo) > tol || std::abs(bias + scale - hi) > tol * 4)
     throw InputError(name, "was made from another height map (its height range differs from displacement.exr's)");
 }
 
-std::string required_stream(const std::string& method) { return method == "sphere-tracing" ? "sdf.exr" : ""; }
+std::string string_attribute(const Image& img, const char* key) {
+  const auto it = img.metadata.find(key);
+  if (it == img.metadata.end()) return "";
+  const std::string* s = std::get_if<std::string>(&it->second);
+  return s ? *s : "";
+}
+}  // namespace
+
+void check_sdf_matches(const Image& sdf, const Image& displacement, const std::string& name) {
+  const int depth = static_cast<int>(stream_number(sdf, "depth", name));
+  if (depth < 1 || sdf.height % depth != 0 || sdf.width != displacement.width || sdf.height / depth != displacement.height)
+    throw InputError(name, "its size does not match displacement.exr (made from another height map?)");
+  check_height_range(sdf, displacement, name, "meso streams sdf");
+}
+
+void check_cone_matches(const Image& cone, const Image& displacement, const std::string& kind, const std::string& name) {
+  const char* producer = kind == "relaxed" ? "meso streams relaxed-cone" : "meso streams cone";
+  const std::string found = string_attribute(cone, "cone_kind");
+  if (found.empty()) throw InputError(name, std::string("lacks the meso:cone_kind attribute of ") + producer);
+  if (found != kind)
+    throw InputError(name, "is a " + found + " cone map; this method needs a " + kind + " one (" + producer + ")");
+  if (cone.channels < 3) throw InputError(name, "needs 3 channels (height, cone ratio, apex height)");
+  if (cone.width != displacement.width || cone.height != displacement.height)
+    throw InputError(name, "its size does not match displacement.exr (made from another height map?)");
+  // Ratios are stored in units of u: texels_per_u must be the width the shader multiplies by.
+  if (cone.metadata.count("texels_per_u") && static_cast<int>(stream_number(cone, "texels_per_u", name, producer)) != cone.width)
+    throw InputError(name, "its meso:texels_per_u differs from its width");
+  check_height_range(cone, displacement, name, producer);
+}
+
+void check_stream_matches(const std::string& method, const Image& stream, const Image& displacement, const std::string& name) {
+  if (method == "sphere-tracing") check_sdf_matches(stream, displacement, name);
+  if (method == "cone") check_cone_matches(stream, displacement, "conservative", name);
+  if (method == "relaxed-cone") check_cone_matches(stream, displacement, "relaxed", name);
+}
+
+std::string required_stream(const std::string& method) {
+  if (method == "sphere-tracing") return "sdf.exr";
+  if (method == "cone") return "cone.exr";
+  if (method == "relaxed-cone") return "relaxed-cone.exr";
+  return "";
+}
+
+const Image* stream_for(const PreviewMaps& maps, const std::string& method) {
+  if (method == "sphere-tracing") return &maps.sdf;
+  if (method == "cone") return &maps.cone;
+  if (method == "relaxed-cone") return &maps.relaxed_cone;
+  return nullptr;
+}
+
+Image* stream_for(PreviewMaps& maps, const std::string& method) {
+  return const_cast<Image*>(stream_for(static_cast<const PreviewMaps&>(maps), method));
+}
 
 int method_index(const std::string& name) {
   const auto& m = preview_methods();
@@ -227,6 +276,8 @@ SurfaceRenderer::SurfaceRenderer(const Mesh& base, const PreviewMaps& maps) : ba
   height_tex_ = upload_texture(maps.displacement, 1);
   normal_tex_ = upload_texture(maps.normal_ts, 3);
   if (!maps.sdf.empty()) upload_sdf(maps.sdf, maps.displacement);
+  if (!maps.cone.empty()) upload_cone(0, maps.cone, maps.displacement);
+  if (!maps.relaxed_cone.empty()) upload_cone(1, maps.relaxed_cone, maps.displacement);
   const auto& px = maps.displacement.pixels;
   if (!px.empty()) {
     const auto [lo, hi] = std::minmax_element(px.begin(), px.end());
@@ -237,7 +288,7 @@ SurfaceRenderer::SurfaceRenderer(const Mesh& base, const PreviewMaps& maps) : ba
 
 void SurfaceRenderer::upload_sdf(const Image& sdf, const Image& displacement) {
   check_sdf_matches(sdf, displacement, "sdf.exr");
-  auto number = [&](const char* key) { return sdf_number(sdf, key, "sdf.exr"); };
+  auto number = [&](const char* key) { return stream_number(sdf, key, "sdf.exr"); };
   const int depth = static_cast<int>(number("depth"));
   sdf_relief_ = number("relief");
   sdf_scale_ = number("height_scale");
@@ -248,9 +299,8 @@ void SurfaceRenderer::upload_sdf(const Image& sdf, const Image& displacement) {
     const double tx = 1.0 / displacement.width, tz = static_cast<double>(sdf_relief_) / depth;
     sdf_margin_ = static_cast<float>(std::sqrt(2 * tx * tx + tz * tz));  // voxel diagonal, units of u
   }
-  const auto border = sdf.metadata.find("border");
-  const bool wrap = border != sdf.metadata.end() && std::get_if<std::string>(&border->second) &&
-                    std::get<std::string>(border->second) == "wrap";
+  const bool wrap = string_attribute(sdf, "border") == "wrap";
+  sdf_wrap_ = wrap;
   // Slices in rows [k H, (k+1) H) top row first; GL rows bottom first within each slice.
   const int w = sdf.width, h = sdf.height / depth;
   std::vector<float> voxels(sdf.pixels.size());
@@ -264,19 +314,29 @@ void SurfaceRenderer::upload_sdf(const Image& sdf, const Image& displacement) {
   glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
   glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
   const GLint wrap_mode = wrap ? GL_REPEAT : GL_CLAMP_TO_EDGE;
-  // Streams and shaders agree on the border (height_field.hpp): a tiling field makes the
-  // height and normal maps tile too.
-  for (GLuint tex : {height_tex_, normal_tex_}) {
-    glBindTexture(GL_TEXTURE_2D, tex);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, wrap_mode);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, wrap_mode);
-  }
   glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_WRAP_S, wrap_mode);
   glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_WRAP_T, wrap_mode);
   glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_WRAP_R, GL_CLAMP_TO_EDGE);
 }
 
+void SurfaceRenderer::upload_cone(int k, const Image& cone, const Image& displacement) {
+  const bool relaxed = k == 1;
+  const std::string name = relaxed ? "relaxed-cone.exr" : "cone.exr";
+  check_cone_matches(cone, displacement, relaxed ? "relaxed" : "conservative", name);
+  const size_t i = static_cast<size_t>(k);
+  cone_scale_[i] = stream_number(cone, "height_scale", name);
+  cone_bias_[i] = stream_number(cone, "height_bias", name);
+  cone_wrap_[i] = string_attribute(cone, "border") == "wrap";
+  // Rows flipped as every 2D map (GL row 0 = image row H-1); the shader reads texels with
+  // texelFetch only (a filtered cone ratio is not a cone of anything), so filtering is off.
+  cone_tex_[i] = upload_texture(cone, 3);
+  glBindTexture(GL_TEXTURE_2D, cone_tex_[i]);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+}
+
 SurfaceRenderer::~SurfaceRenderer() {
+  glDeleteTextures(2, cone_tex_.data());
   glDeleteTextures(1, &sdf_tex_);
   glDeleteTextures(1, &height_tex_);
   glDeleteTextures(1, &normal_tex_);
@@ -305,14 +365,27 @@ void SurfaceRenderer::draw(const PreviewOptions& o, int width, int height) {
   glUniform1i(glGetUniformLocation(program_, "u_shade"), static_cast<int>(o.shade));
   glUniform1f(glGetUniformLocation(program_, "u_h_min"), h_min_);
   glUniform1f(glGetUniformLocation(program_, "u_h_max"), h_max_);
+  const int cone = o.method == "cone" ? 0 : o.method == "relaxed-cone" ? 1 : -1;
+  const bool stream_missing = o.method == "sphere-tracing" ? !sdf_tex_ : cone >= 0 && !cone_tex_[static_cast<size_t>(cone)];
+  if (stream_missing) throw UsageError("method " + o.method + " needs the stream " + required_stream(o.method) + " (meso streams)");
+  // Streams and shaders agree on the border (height_field.hpp): a tiling field makes the
+  // height and normal maps tile too. A method with a stream follows its stream; the others
+  // tile when any loaded stream does.
+  const bool wrap = o.method == "sphere-tracing" ? sdf_wrap_
+                    : cone >= 0                  ? cone_wrap_[static_cast<size_t>(cone)]
+                                                 : (sdf_tex_ && sdf_wrap_) || (cone_tex_[0] && cone_wrap_[0]) || (cone_tex_[1] && cone_wrap_[1]);
+  const GLint wrap_mode = wrap ? GL_REPEAT : GL_CLAMP_TO_EDGE;
+  for (GLuint tex : {height_tex_, normal_tex_}) {
+    glBindTexture(GL_TEXTURE_2D, tex);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, wrap_mode);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, wrap_mode);
+  }
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, height_tex_);
   glUniform1i(glGetUniformLocation(program_, "u_height"), 0);
   glActiveTexture(GL_TEXTURE1);
   glBindTexture(GL_TEXTURE_2D, normal_tex_);
   glUniform1i(glGetUniformLocation(program_, "u_normal"), 1);
-  if (!required_stream(o.method).empty() && !sdf_tex_)
-    throw UsageError("method " + o.method + " needs the stream " + required_stream(o.method) + " (meso streams)");
   glActiveTexture(GL_TEXTURE2);
   glBindTexture(GL_TEXTURE_3D, sdf_tex_);
   glUniform1i(glGetUniformLocation(program_, "u_sdf"), 2);
@@ -322,6 +395,13 @@ void SurfaceRenderer::draw(const PreviewOptions& o, int width, int height) {
   glUniform1f(glGetUniformLocation(program_, "u_sdf_aspect"), sdf_aspect_);
   glUniform1f(glGetUniformLocation(program_, "u_sdf_epsilon"), sdf_epsilon_);
   glUniform1f(glGetUniformLocation(program_, "u_sdf_margin"), sdf_margin_);
+  const size_t c = cone >= 0 ? static_cast<size_t>(cone) : 0;
+  glActiveTexture(GL_TEXTURE3);
+  glBindTexture(GL_TEXTURE_2D, cone_tex_[c]);
+  glUniform1i(glGetUniformLocation(program_, "u_cone"), 3);
+  glUniform1f(glGetUniformLocation(program_, "u_cone_scale"), cone_scale_[c]);
+  glUniform1f(glGetUniformLocation(program_, "u_cone_bias"), cone_bias_[c]);
+  glUniform1i(glGetUniformLocation(program_, "u_cone_wrap"), cone_wrap_[c] ? 1 : 0);
   glBindVertexArray(vao_);
   glDrawElements(GL_TRIANGLES, index_count_, GL_UNSIGNED_INT, nullptr);
   glBindVertexArray(0);

@@ -30,10 +30,17 @@ class SurfaceRenderer {
 
  private:
   void upload_sdf(const Image& sdf, const Image& displacement);
+  // k = 0: cone.exr, 1: relaxed-cone.exr.
+  void upload_cone(int k, const Image& cone, const Image& displacement);
 
   const Mesh& base_;
   GLuint program_ = 0, vao_ = 0, vbo_ = 0, ibo_ = 0, height_tex_ = 0, normal_tex_ = 0, sdf_tex_ = 0;
   float sdf_scale_ = 0, sdf_bias_ = 0, sdf_relief_ = 0, sdf_aspect_ = 1, sdf_epsilon_ = 0, sdf_margin_ = 0;
+  bool sdf_wrap_ = false;
+  // The cone maps (RGB32F, read only with texelFetch): texture, height scale/bias, border.
+  std::array<GLuint, 2> cone_tex_{};
+  std::array<float, 2> cone_scale_{}, cone_bias_{};
+  std::array<bool, 2> cone_wrap_{};
   GLsizei index_count_ = 0;
   float h_min_ = 0, h_max_ = 0;
 };

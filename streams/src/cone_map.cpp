@@ -280,11 +280,36 @@ struct MaxTree {
   std::vector<int> w, h;
   std::vector<std::vector<float>> level;
   std::vector<std::vector<float>> plane;  // per node a, gx, gy (level 0 unused)
+  // Per node (levels >= 1) the box of S's gradients over it, gx in [0], [1], gy in [2], [3]:
+  // relaxed cones skip a node where the surface rises away from the whole footprint.
+  std::vector<std::vector<float>> gradient;
   size_t index(int l, int x, int y) const {
     return static_cast<size_t>(y) * static_cast<size_t>(w[static_cast<size_t>(l)]) + static_cast<size_t>(x);
   }
   float at(int l, int x, int y) const { return level[static_cast<size_t>(l)][index(l, x, y)]; }
 };
+
+// The box of S's gradients over texel (i, j): on each of its four pieces dS/dx is affine in
+// y and dS/dy in x, so the pieces' corners give the extremes. Rounded outward.
+void texel_gradients(const HalfGrid& grid, int i, int j, float* q) {
+  double lo_x = kInf, hi_x = -kInf, lo_y = kInf, hi_y = -kInf;
+  for (int b = 2 * j; b <= 2 * j + 1; ++b)
+    for (int a = 2 * i; a <= 2 * i + 1; ++a) {
+      const double v00 = grid.at(a, b), v10 = grid.at(a + 1, b), v01 = grid.at(a, b + 1), v11 = grid.at(a + 1, b + 1);
+      for (double gx : {2 * (v10 - v00), 2 * (v11 - v01)}) {
+        lo_x = std::min(lo_x, gx);
+        hi_x = std::max(hi_x, gx);
+      }
+      for (double gy : {2 * (v01 - v00), 2 * (v11 - v10)}) {
+        lo_y = std::min(lo_y, gy);
+        hi_y = std::max(hi_y, gy);
+      }
+    }
+  q[0] = std::nextafter(static_cast<float>(lo_x), -std::numeric_limits<float>::infinity());
+  q[1] = std::nextafter(static_cast<float>(hi_x), std::numeric_limits<float>::infinity());
+  q[2] = std::nextafter(static_cast<float>(lo_y), -std::numeric_limits<float>::infinity());
+  q[3] = std::nextafter(static_cast<float>(hi_y), std::numeric_limits<float>::infinity());
+}
 
 // A float not below v.
 float up(double v) {
@@ -317,21 +342,26 @@ MaxTree max_tree(std::vector<float> top, const HalfGrid& grid, int width, int he
   t.h.push_back(height);
   t.level.push_back(std::move(top));
   t.plane.emplace_back();
+  t.gradient.emplace_back();
   // Level-0 planes (texel_plane), kept only to build level 1; the search recomputes them.
   std::vector<float> p0(static_cast<size_t>(width) * static_cast<size_t>(height) * 3);
+  std::vector<float> g0(static_cast<size_t>(width) * static_cast<size_t>(height) * 4);
   tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
     for (int j = rows.begin(); j < rows.end(); ++j)
       for (int i = 0; i < width; ++i) {
         texel_plane(grid, i, j, &p0[(static_cast<size_t>(j) * static_cast<size_t>(width) + static_cast<size_t>(i)) * 3]);
+        texel_gradients(grid, i, j, &g0[(static_cast<size_t>(j) * static_cast<size_t>(width) + static_cast<size_t>(i)) * 4]);
       }
   });
   const std::vector<float>* fine_plane = &p0;
+  const std::vector<float>* fine_gradient = &g0;
   while (t.w.back() > 1 || t.h.back() > 1) {
     const int l = static_cast<int>(t.w.size()) - 1;  // the finer level
     const int fw = t.w.back(), fh = t.h.back(), cw = (fw + 1) / 2, ch = (fh + 1) / 2;
     const double fs = std::ldexp(1.0, l), cs = 2 * fs;  // node sizes in texels
     std::vector<float> c(static_cast<size_t>(cw) * static_cast<size_t>(ch));
     std::vector<float> cp(c.size() * 3);
+    std::vector<float> cg(c.size() * 4);
     const std::vector<float>& fine = t.level.back();
     auto rect_of = [&](double size, int x, int y, double& x0, double& y0, double& x1, double& y1) {
       x0 = x * size;
@@ -381,15 +411,38 @@ MaxTree max_tree(std::vector<float> top, const HalfGrid& grid, int width, int he
           cp[n * 3] = up(a);
           cp[n * 3 + 1] = fx;
           cp[n * 3 + 2] = fy;
+          float* box = &cg[n * 4];
+          box[0] = box[2] = std::numeric_limits<float>::infinity();
+          box[1] = box[3] = -std::numeric_limits<float>::infinity();
+          for (int yy = 2 * y; yy <= std::min(2 * y + 1, fh - 1); ++yy)
+            for (int xx = 2 * x; xx <= std::min(2 * x + 1, fw - 1); ++xx) {
+              const float* child = &(*fine_gradient)[(static_cast<size_t>(yy) * static_cast<size_t>(fw) + static_cast<size_t>(xx)) * 4];
+              box[0] = std::min(box[0], child[0]);
+              box[1] = std::max(box[1], child[1]);
+              box[2] = std::min(box[2], child[2]);
+              box[3] = std::max(box[3], child[3]);
+            }
         }
     });
     t.w.push_back(cw);
     t.h.push_back(ch);
     t.level.push_back(std::move(c));
     t.plane.push_back(std::move(cp));
+    t.gradient.push_back(std::move(cg));
     fine_plane = &t.plane.back();
+    fine_gradient = &t.gradient.back();
   }
   return t;
+}
+
+// No point of the rectangle r is seen descending from F: grad S(y) . (y - x) >= 0 for every
+// corner x of F, with the gradient anywhere in its box (interval products, so safe).
+bool rises_away(const float* box, const Rect& r, const Rect& f) {
+  auto low = [](double g0, double g1, double d0, double d1) { return std::min({g0 * d0, g0 * d1, g1 * d0, g1 * d1}); };
+  for (double fx : {f.x0, f.x1})
+    for (double fy : {f.y0, f.y1})
+      if (low(box[0], box[1], r.x0 - fx, r.x1 - fx) + low(box[2], box[3], r.y0 - fy, r.y1 - fy) < 0) return false;
+  return true;
 }
 
 // Upper bound of S(y) - psi dist(y, F) - T over the rectangle r (disjoint from F's
@@ -519,10 +572,17 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
               return false;
             };
             if (d > 0 && n.level > 0 && under(&tree.plane[static_cast<size_t>(n.level)][tree.index(n.level, n.x, n.y) * 3])) continue;
+            if (relaxed && n.level > 0 && rises_away(&tree.gradient[static_cast<size_t>(n.level)][tree.index(n.level, n.x, n.y) * 4], r, f))
+              continue;
             if (n.level == 0) {
               std::array<float, 3> plane{};
               texel_plane(g, n.x, n.y, plane.data());
               if (d > 0 && under(plane.data())) continue;
+              if (relaxed) {
+                std::array<float, 4> box{};
+                texel_gradients(g, n.x, n.y, box.data());
+                if (rises_away(box.data(), r, f)) continue;
+              }
               for (int b = 2 * n.y; b <= 2 * n.y + 1; ++b)
                 for (int a = 2 * n.x; a <= 2 * n.x + 1; ++a)
                   search.piece(Piece(ox + 0.5 * a, oy + 0.5 * b, g.at(a, b), g.at(a + 1, b), g.at(a, b + 1), g.at(a + 1, b + 1)));
