@@ -544,12 +544,15 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
     for (int j = rows.begin(); j < rows.end(); ++j) {
       // Seeds chain along a row only, so results never depend on how rows are split among
       // threads.
-      ConeSearch::Point previous;
+      ConeSearch::Point previous_conservative, previous_relaxed;
       for (int i = 0; i < w; ++i) {
         const double t = top[static_cast<size_t>(j) * static_cast<size_t>(w) + static_cast<size_t>(i)];
         const Rect f{static_cast<double>(i), static_cast<double>(j), i + 1.0, j + 1.0};
-        ConeSearch search(f, t, relaxed, o.tolerance);
-        search.seed(previous);  // the steepest point of the texel before it in this row
+        // One search: the supremum of the slope (relaxed: over points seen descending),
+        // seeded with the steepest point of the texel before it in this row.
+        auto search_texel = [&](bool relaxed_kind, ConeSearch::Point& previous) {
+        ConeSearch search(f, t, relaxed_kind, o.tolerance);
+        search.seed(previous);
         // Depth-first over one copy of the map shifted by (ox, oy) pixels, nearest child
         // first; a node whose maximum cannot beat the slope attained so far is skipped.
         auto visit = [&](double ox, double oy) {
@@ -579,13 +582,13 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
               return false;
             };
             if (d > 0 && n.level > 0 && under(&tree.plane[static_cast<size_t>(n.level)][tree.index(n.level, n.x, n.y) * 3])) continue;
-            if (relaxed && n.level > 0 && rises_away(&tree.gradient[static_cast<size_t>(n.level)][tree.index(n.level, n.x, n.y) * 4], r, f))
+            if (relaxed_kind && n.level > 0 && rises_away(&tree.gradient[static_cast<size_t>(n.level)][tree.index(n.level, n.x, n.y) * 4], r, f))
               continue;
             if (n.level == 0) {
               std::array<float, 3> plane{};
               texel_plane(g, n.x, n.y, plane.data());
               if (d > 0 && under(plane.data())) continue;
-              if (relaxed) {
+              if (relaxed_kind) {
                 std::array<float, 4> box{};
                 texel_gradients(g, n.x, n.y, box.data());
                 if (rises_away(box.data(), r, f)) continue;
@@ -628,7 +631,13 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
             }
         }
         previous = search.best;
-        const double psi = std::max(search.psi, search.bound);
+        return std::pair{std::max(search.psi, search.bound), search.bound > search.psi * (1 + o.tolerance)};
+        };
+        auto [psi, loose] = search_texel(relaxed, relaxed ? previous_relaxed : previous_conservative);
+        // A relaxed cone is never narrower than the conservative one (which satisfies the
+        // relaxed condition too); where the relaxed search kept a loose bound (near a fan)
+        // the conservative search decides.
+        if (relaxed && loose) psi = std::min(psi, search_texel(false, previous_conservative).first);
         const double ratio = psi > 0 ? 1.0 / (psi * w) : kInf;  // texels -> units of u
         out.at(i, j, 0) = field.height.at(i, j);
         out.at(i, j, 1) = round_down(std::min(ratio, static_cast<double>(kConeRatioCap)), o.half);
