@@ -60,7 +60,11 @@ DistanceField build_distance_field(const HeightField& field, const DistanceField
       // Pass 1, along x on every grid row; f is the squared height gap to the row's boxes.
       // Evaluated only at texel centres a = 2x + 1 and stored transposed, so that pass 2
       // reads contiguous columns.
-      for (size_t b = 0; b < GH; ++b) {
+      // Only the rows through texel centres (odd b) need an envelope: a point on a texel
+      // edge row touches exactly the boxes of the two centre rows beside it, so its top is
+      // their maximum, its f their minimum, and the minimum over a of (x - a)^2 + f commutes
+      // with that: the edge row's result is the smaller of its neighbours' results.
+      for (size_t b = 1; b < GH; b += 2) {
         const float* tops = grid_top.data() + b * GW;
         for (size_t a = 0; a < GW; ++a) {
           const double dz = std::max(0.0, zk - static_cast<double>(tops[a])) * z_scale;
@@ -70,6 +74,12 @@ DistanceField build_distance_field(const HeightField& field, const DistanceField
         LowerEnvelope::Cursor c;
         for (size_t x = 0; x < W; ++x)
           inter[x * GH + b] = static_cast<float>(env.eval(line.data(), 1, 2.0 * (static_cast<double>(x) + pad_x) + 1, c));
+      }
+      for (size_t x = 0; x < W; ++x) {
+        float* col = inter.data() + x * GH;
+        col[0] = col[1];
+        col[GH - 1] = col[GH - 2];
+        for (size_t b = 2; b + 1 < GH; b += 2) col[b] = std::min(col[b - 1], col[b + 1]);
       }
       // Pass 2, along y on every texel-centre column; evaluated at b = 2y + 1.
       float* slice = df.distance.data() + static_cast<size_t>(k) * static_cast<size_t>(h) * W;

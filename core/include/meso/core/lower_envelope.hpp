@@ -24,18 +24,25 @@ struct LowerEnvelope {
     v[0] = 0;
     z[0] = -kInf;
     z[1] = kInf;
+    int vk = 0;
+    double gk = at(0);
     for (int q = 1; q < n; ++q) {
-      // Intersection with the last parabola; pop parabolas the new one hides entirely.
-      // z[0] = -inf ends the loop at k = 0.
-      double s = (at(q) - at(v[static_cast<size_t>(k)])) / (2.0 * (q - v[static_cast<size_t>(k)]));
-      while (s <= z[static_cast<size_t>(k)]) {
+      // Intersection s = (g_q - g_v) / (2 (q - v)) with the last parabola v (g_p = f(p) + p^2);
+      // pop parabolas the new one hides entirely. Compared as a product (q > v), so only the
+      // kept intersection costs a division. z[0] = -inf ends the loop at k = 0.
+      const double gq = at(q);
+      while (gq - gk <= 2.0 * (q - vk) * z[static_cast<size_t>(k)]) {
         --k;
-        s = (at(q) - at(v[static_cast<size_t>(k)])) / (2.0 * (q - v[static_cast<size_t>(k)]));
+        vk = v[static_cast<size_t>(k)];
+        gk = at(vk);
       }
+      const double s = (gq - gk) / (2.0 * (q - vk));
       ++k;
       v[static_cast<size_t>(k)] = q;
       z[static_cast<size_t>(k)] = s;
       z[static_cast<size_t>(k) + 1] = kInf;
+      vk = q;
+      gk = gq;
     }
   }
 
