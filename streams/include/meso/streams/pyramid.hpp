@@ -28,4 +28,16 @@ MinMaxPyramid build_min_max_pyramid(const HeightField& field);
 // surface over the texel's footprint.
 Image footprint_min_max(const HeightField& field);
 
+struct HeightRay;
+struct HeightHit;
+
+// Reference CPU tracer of the max pyramid (pyramidal displacement mapping, survey 4.3.3):
+// descends the quadtree front to back along the ray, skipping every texel whose box
+// [footprint] x [0, max] the ray misses, and intersects S exactly inside level-0 footprints
+// (intersect_footprint, cone_map.hpp). Finds the first intersection (up to rounding); the
+// same units as trace_cone_map (pixels of level 0, normalised height). Rays leaving
+// [0, W] x [0, H] miss (the tracer does not follow Border::wrap into neighbouring tiles).
+// `steps` counts the texels visited.
+HeightHit trace_min_max_pyramid(const HeightField& field, const MinMaxPyramid& pyramid, const HeightRay& ray);
+
 }  // namespace meso
