@@ -231,8 +231,9 @@ class ConeSearch {
         }
         upper = std::min(upper, b);
       };
-      for (int k = 0; k < 4; ++k) along(ox[k], oy[k]);
+      // The centre first, then the corners, until one settles it.
       along(ox[0] + ox[3], oy[0] + oy[3]);
+      for (int k = 0; k < 4 && upper > psi; ++k) along(ox[k], oy[k]);
       if (touches_) {
         // Mean value bound from c: S(y) - T <= S(c) - T + (grad S(xi) . u) |y - c|, u the
         // unit direction from c into the zone's quadrant and xi on the segment, inside the
@@ -460,39 +461,39 @@ bool rises_away(const float* box, const Rect& r, const Rect& f) {
 // sqrt((x - e)^2 + k^2) off its corner: the maximum of gx x - psi sqrt((x - e)^2 + k^2) is at
 // x - e = k r / sqrt(1 - r^2), r = gx / psi, when |r| < 1; else at an end.
 double plane_excess(const float* plane, const Rect& r, const Rect& f, double top, double psi) {
-  const double a = plane[0], gx = plane[1], gy = plane[2];
+  const double a = plane[0] - top, gx = plane[1], gy = plane[2];
   const double ncx = 0.5 * (r.x0 + r.x1), ncy = 0.5 * (r.y0 + r.y1);
   auto h = [&](double x, double y) {
-    const double dx = gap(f.x0, f.x1, x, x), dy = gap(f.y0, f.y1, y, y);
-    return a + gx * (x - ncx) + gy * (y - ncy) - psi * length(dx, dy);
+    return a + gx * (x - ncx) + gy * (y - ncy) - psi * length(gap(f.x0, f.x1, x, x), gap(f.y0, f.y1, y, y));
   };
+  // Corners first: a positive one settles it (the caller only asks whether it is <= 0).
   double best = -kInf;
-  // One edge: coordinate s in [s0, s1] varies, the other is fixed at `fixed`; g the plane's
-  // slope along s; [e0, e1] F's extent along s; k the gap to F across the edge.
+  for (double y : {r.y0, r.y1})
+    for (double x : {r.x0, r.x1}) {
+      best = std::max(best, h(x, y));
+      if (best > 0) return best;
+    }
+  // Then, along each edge, where F's lines cross it (dist changes form there) and the
+  // stationary point off F's side or corner.
   auto edge = [&](double s0, double s1, double e0, double e1, double k, double slope, auto&& point) {
-    best = std::max(best, std::max(point(s0), point(s1)));
+    for (double e : {e0, e1})
+      if (e > s0 && e < s1) best = std::max(best, point(e));
     if (!(psi > 0) || k <= 0) return;  // piecewise linear along the edge: ends and F's lines
     const double ratio = slope / psi;
     if (std::abs(ratio) >= 1) return;
     const double offset = k * ratio / std::sqrt(1 - ratio * ratio);
-    for (double e : {e0, e1}) {
-      const double s = e + offset;
-      if ((e == e0 && s <= e0) || (e == e1 && s >= e1)) best = std::max(best, point(std::clamp(s, s0, s1)));
-    }
+    if (offset <= 0 && e0 + offset > s0) best = std::max(best, point(std::min(e0 + offset, s1)));
+    if (offset >= 0 && e1 + offset < s1) best = std::max(best, point(std::max(e1 + offset, s0)));
   };
   for (double y : {r.y0, r.y1}) {
-    const double k = gap(f.y0, f.y1, y, y);
-    for (double e : {f.x0, f.x1})
-      if (e > r.x0 && e < r.x1) best = std::max(best, h(e, y));
-    edge(r.x0, r.x1, f.x0, f.x1, k, gx, [&](double x) { return h(x, y); });
+    edge(r.x0, r.x1, f.x0, f.x1, gap(f.y0, f.y1, y, y), gx, [&](double x) { return h(x, y); });
+    if (best > 0) return best;
   }
   for (double x : {r.x0, r.x1}) {
-    const double k = gap(f.x0, f.x1, x, x);
-    for (double e : {f.y0, f.y1})
-      if (e > r.y0 && e < r.y1) best = std::max(best, h(x, e));
-    edge(r.y0, r.y1, f.y0, f.y1, k, gy, [&](double y) { return h(x, y); });
+    edge(r.y0, r.y1, f.y0, f.y1, gap(f.x0, f.x1, x, x), gy, [&](double y) { return h(x, y); });
+    if (best > 0) return best;
   }
-  return best - top;
+  return best;
 }
 
 // Stored ratios round toward zero (a narrower cone is still safe); ratios are >= 0 and
