@@ -217,6 +217,29 @@ TEST_F(Skeleton, WholePipeline) {
   const Result bake = run("bake --low " + (d / "reduced.obj").string() + " --high " + (d / "high.obj").string() + " -o " +
                        (d / "maps").string() + " --size 128x64");
   ASSERT_EQ(bake.code, 0) << bake.err;
+  // Chosen maps only, reach as a percentage, the 16-bit displacement with its range.
+  const Result chosen = run("bake --low " + (d / "reduced.obj").string() + " --high " + (d / "high.obj").string() + " -o " +
+                            (d / "chosen").string() + " --size 64 --maps displacement_png,normal_os --front 4% --back 4% " +
+                            "--hit front-else-nearest --ignore-backfaces --json");
+  ASSERT_EQ(chosen.code, 0) << chosen.err;
+  EXPECT_TRUE(fs::exists(d / "chosen" / "displacement.png"));
+  EXPECT_TRUE(fs::exists(d / "chosen" / "normal_os.png"));
+  EXPECT_FALSE(fs::exists(d / "chosen" / "displacement.exr"));
+  const auto chosen_report = nlohmann::json::parse(chosen.out);
+  EXPECT_EQ(chosen_report["hit_rule"], "front-else-nearest");
+  EXPECT_NEAR(chosen_report["front"].get<double>(), chosen_report["back"].get<double>(), 1e-9);
+  const Image disp_png = read_image(d / "chosen" / "displacement.png");
+  // PNG keeps text: the scale is written round-trippably.
+  EXPECT_FLOAT_EQ(std::stof(std::get<std::string>(disp_png.metadata.at("height_scale"))),
+                  chosen_report["displacement_png"]["scale"].get<float>());
+  EXPECT_EQ(run("bake --low " + (d / "reduced.obj").string() + " --high " + (d / "high.obj").string() + " -o " +
+                (d / "bad").string() + " --maps displacement,nonsense")
+                .code,
+            2);
+  EXPECT_EQ(run("bake --low " + (d / "reduced.obj").string() + " --high " + (d / "high.obj").string() + " -o " +
+                (d / "bad").string() + " --front 5%%")
+                .code,
+            2);
 
   const Result pyramid = run("streams pyramid " + (d / "maps" / "displacement.exr").string() + " -o " +
                              (d / "pyramid.exr").string() + " --json");

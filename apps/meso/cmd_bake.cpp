@@ -6,25 +6,76 @@
 #include "meso/formats/image_io.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
+#include <map>
+#include <sstream>
 
 namespace meso::cli {
 
+namespace {
+
+// A length in object units ("0.02") or as a percentage of a diagonal ("5%"); "" = 0.
+float parse_length(const std::string& text, float diagonal, const char* option) {
+  if (text.empty()) return 0.0f;
+  const bool percent = text.back() == '%';
+  const std::string number = percent ? text.substr(0, text.size() - 1) : text;
+  size_t used = 0;
+  float v = 0;
+  try {
+    v = std::stof(number, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != number.size() || !std::isfinite(v) || v < 0)
+    throw UsageError(std::string(option) + " '" + text + "': expected a non-negative length or a percentage such as 5%");
+  return percent ? v / 100.0f * diagonal : v;
+}
+
+// The maps `--maps` can select, and where each goes.
+const std::map<std::string, std::string>& map_files() {
+  static const std::map<std::string, std::string> files{{"displacement", "displacement.exr"},
+                                                        {"displacement_png", "displacement.png"},
+                                                        {"normal_ts", "normal_ts.png"},
+                                                        {"normal_ts_exr", "normal_ts.exr"},
+                                                        {"normal_os", "normal_os.png"},
+                                                        {"normal_os_exr", "normal_os.exr"},
+                                                        {"coverage", "coverage.png"}};
+  return files;
+}
+
+}  // namespace
+
 void add_bake(CLI::App& app, Context& ctx) {
   struct Args {
-    std::string low, high, out_dir, size = "1024";
-    float front = 0, back = 0, max_miss_rate = 1;
+    std::string low, high, out_dir, size = "1024", front, back, bunch, hit = "nearest";
+    std::string maps = "displacement,normal_ts,coverage";
+    float max_miss_rate = 1;
     int dilate = -1;
+    bool ignore_backfaces = false;
   };
   auto args = std::make_shared<Args>();
   CLI::App* sub = app.add_subcommand("bake", "Bake displacement and tangent-space normal maps from a high mesh onto a base mesh");
   sub->add_option("--low", args->low, "Base mesh with a unique UV mapping")->required();
   sub->add_option("--high", args->high, "High-poly mesh")->required();
-  sub->add_option("-o,--output", args->out_dir, "Output folder: displacement.exr, normal_ts.png, coverage.png")->required();
+  sub->add_option("-o,--output", args->out_dir, "Output folder (the maps chosen with --maps)")->required();
+  sub->add_option("--maps", args->maps,
+                  "Comma-separated maps to write: displacement (.exr, float), displacement_png (16-bit, normalised; scale and bias "
+                  "in its metadata and the report), normal_ts (.png 16-bit), normal_ts_exr, normal_os (object space, .png 16-bit), "
+                  "normal_os_exr, coverage (.png)")
+      ->capture_default_str();
   sub->add_option("--size", args->size, "Map size: N or WxH texels");
-  sub->add_option("--front", args->front, "Ray reach outward from the base, object units (0: 5% of the high mesh's bounding-box diagonal)")
-      ->check(CLI::NonNegativeNumber & Finite);
-  sub->add_option("--back", args->back, "Ray reach inward from the base, object units (0: as for --front)")->check(CLI::NonNegativeNumber & Finite);
+  sub->add_option("--front", args->front,
+                  "Ray reach outward from the base: object units, or a percentage of the high mesh's bounding-box diagonal "
+                  "(default 5%)");
+  sub->add_option("--back", args->back, "Ray reach inward from the base, as --front (default 5%)");
+  sub->add_option("--hit", args->hit, "Which hit gives a texel its value: nearest, furthest, front-else-nearest, front-only")
+      ->check(CLI::IsMember({"nearest", "furthest", "front-else-nearest", "front-only"}))
+      ->capture_default_str();
+  sub->add_flag("--ignore-backfaces", args->ignore_backfaces, "Ignore high surfaces that face against the base surface");
+  sub->add_option("--bunch", args->bunch,
+                  "Hits closer than this form one bunch (a fold, a decal): its outermost hit is taken; object units or a "
+                  "percentage of the diagonal (default 0.1%)");
   sub->add_option("--max-miss-rate", args->max_miss_rate,
                   "Exit 1 (outputs still written) when more than this fraction of covered texels miss")
       ->check(CLI::Range(0.0, 1.0) & Finite);
@@ -33,22 +84,63 @@ void add_bake(CLI::App& app, Context& ctx) {
     ctx.run = [&ctx, args](nlohmann::json& report, Progress& progress) {
       BakeOptions o;
       parse_size(args->size, o.width, o.height);
-      o.front = args->front;
-      o.back = args->back;
       o.dilate = args->dilate;
+      for (const HitRule rule : {HitRule::nearest, HitRule::furthest, HitRule::front_else_nearest, HitRule::front_only})
+        if (args->hit == hit_rule_name(rule)) o.hit = rule;
+      o.ignore_backfaces = args->ignore_backfaces;
+      std::vector<std::string> wanted;
+      {
+        std::stringstream list(args->maps);
+        std::string name;
+        while (std::getline(list, name, ','))
+          if (!name.empty()) {
+            if (!map_files().count(name)) throw UsageError("--maps: unknown map '" + name + "'");
+            wanted.push_back(name);
+          }
+        if (wanted.empty()) throw UsageError("--maps: no map chosen");
+      }
+      // Lengths may be percentages of the high mesh's diagonal: checked before loading.
+      parse_length(args->front, 1, "--front");
+      parse_length(args->back, 1, "--back");
+      parse_length(args->bunch, 1, "--bunch");
       nlohmann::json low_report, high_report;
       const Mesh low = load_mesh(ctx.globals, args->low, low_report);
       if (!has_uvs(low)) throw InputError(args->low, "has no texture coordinates; bake needs a UV-mapped base mesh");
       const Mesh high = load_mesh(ctx.globals, args->high, high_report);
+      const float diagonal = bounding_box(high).diagonal();
+      o.front = parse_length(args->front, diagonal, "--front");
+      o.back = parse_length(args->back, diagonal, "--back");
+      o.bunch = parse_length(args->bunch, diagonal, "--bunch");
       const BakeResult r = bake(low, high, o, progress);
       const std::filesystem::path dir(args->out_dir);
       OutputSet outputs;
-      write_image(r.displacement, outputs.add(dir / "displacement.exr"), PixelFormat::float32);
-      write_image(encode_normal_map(r.normal_ts), outputs.add(dir / "normal_ts.png"), PixelFormat::uint16);
-      write_image(r.coverage, outputs.add(dir / "coverage.png"), PixelFormat::uint8);
+      nlohmann::json written = nlohmann::json::array();
+      nlohmann::json png_range;
+      for (const std::string& name : wanted) {
+        const std::filesystem::path file = dir / map_files().at(name);
+        written.push_back(file.string());
+        if (name == "displacement") write_image(r.displacement, outputs.add(file), PixelFormat::float32);
+        if (name == "displacement_png") {
+          // Normalised to [0, 1]: object = bias + scale * value.
+          Image png = r.displacement;
+          const float bias = r.min_displacement, scale = r.max_displacement - r.min_displacement;
+          for (float& v : png.pixels) v = scale > 0 ? std::clamp((v - bias) / scale, 0.0f, 1.0f) : 0.0f;
+          png.metadata["height_bias"] = bias;
+          png.metadata["height_scale"] = scale;
+          png.metadata["height_units"] = std::string("object = bias + scale * value");
+          write_image(png, outputs.add(file), PixelFormat::uint16);
+          png_range = {{"bias", bias}, {"scale", scale}};
+        }
+        if (name == "normal_ts") write_image(encode_normal_map(r.normal_ts), outputs.add(file), PixelFormat::uint16);
+        if (name == "normal_ts_exr") write_image(r.normal_ts, outputs.add(file), PixelFormat::float32);
+        if (name == "normal_os") write_image(encode_normal_map(r.normal_os), outputs.add(file), PixelFormat::uint16);
+        if (name == "normal_os_exr") write_image(r.normal_os, outputs.add(file), PixelFormat::float32);
+        if (name == "coverage") write_image(r.coverage, outputs.add(file), PixelFormat::uint8);
+      }
       outputs.commit();
       if (r.misses) warn(ctx.globals, std::to_string(r.misses) + " of " + std::to_string(r.covered_texels) + " covered texels found no high surface within reach");
-      info(ctx.globals, "wrote " + (dir / "displacement.exr").string() + " and " + (dir / "normal_ts.png").string());
+      if (r.ambiguous) warn(ctx.globals, std::to_string(r.ambiguous) + " texels had an ambiguous choice of hit (coverage value 0.75)");
+      info(ctx.globals, "wrote " + std::to_string(wanted.size()) + " maps to " + dir.string());
       report = {{"command", "bake"},
                 {"low", low_report},
                 {"high", high_report},
@@ -56,20 +148,30 @@ void add_bake(CLI::App& app, Context& ctx) {
                 {"height", o.height},
                 {"front", r.front},
                 {"back", r.back},
+                {"bunch", r.bunch},
+                {"hit_rule", hit_rule_name(o.hit)},
+                {"ignore_backfaces", o.ignore_backfaces},
+                {"ambiguous", r.ambiguous},
                 {"covered_texels", r.covered_texels},
                 {"hits", r.hits},
                 {"misses", r.misses},
                 {"displacement_min", r.min_displacement},
                 {"displacement_max", r.max_displacement},
-                {"outputs", {(dir / "displacement.exr").string(), (dir / "normal_ts.png").string(), (dir / "coverage.png").string()}}};
-      // The faces the artist should look at: those whose texels missed, worst first.
-      nlohmann::json faces = nlohmann::json::array();
-      std::vector<size_t> order;
-      for (size_t f = 0; f < r.face_misses.size(); ++f)
-        if (r.face_misses[f]) order.push_back(f);
-      std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return r.face_misses[a] > r.face_misses[b]; });
-      for (size_t f : order) faces.push_back({{"face", f}, {"texels", r.face_texels[f]}, {"misses", r.face_misses[f]}});
-      report["miss_faces"] = faces;
+                {"outputs", written}};
+      if (!png_range.is_null()) report["displacement_png"] = png_range;
+      // The faces the artist should look at: those whose texels missed or were ambiguous,
+      // worst first.
+      auto worst_faces = [&](const std::vector<uint32_t>& count, const char* key) {
+        nlohmann::json faces = nlohmann::json::array();
+        std::vector<size_t> order;
+        for (size_t f = 0; f < count.size(); ++f)
+          if (count[f]) order.push_back(f);
+        std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return count[a] > count[b]; });
+        for (size_t f : order) faces.push_back({{"face", f}, {"texels", r.face_texels[f]}, {key, count[f]}});
+        return faces;
+      };
+      report["miss_faces"] = worst_faces(r.face_misses, "misses");
+      report["ambiguous_faces"] = worst_faces(r.face_ambiguous, "ambiguous");
       const double miss_rate = r.covered_texels ? static_cast<double>(r.misses) / static_cast<double>(r.covered_texels) : 0.0;
       report["miss_rate"] = miss_rate;
       if (miss_rate > args->max_miss_rate) {

@@ -11,6 +11,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -60,7 +61,7 @@ class RayScene {
     float u = 0, v = 0;
     bool valid() const { return std::isfinite(t); }
   };
-  Hit intersect(const Vec3f& org, const Vec3f& dir, float tfar) const {
+  Hit intersect(const Vec3f& org, const Vec3f& dir, float tnear, float tfar) const {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     RTCRayHit rh{};
@@ -70,7 +71,7 @@ class RayScene {
     rh.ray.dir_x = dir[0];
     rh.ray.dir_y = dir[1];
     rh.ray.dir_z = dir[2];
-    rh.ray.tnear = 0.0f;
+    rh.ray.tnear = tnear;
     rh.ray.tfar = tfar;
     rh.ray.mask = 0xFFFFFFFFu;
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
@@ -84,7 +85,33 @@ class RayScene {
     }
     return h;
   }
+  // Whether anything lies along the ray within [tnear, tfar] (an any-hit query: cheaper).
+  bool occluded(const Vec3f& org, const Vec3f& dir, float tnear, float tfar) const {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    RTCRay ray{};
+    ray.org_x = org[0];
+    ray.org_y = org[1];
+    ray.org_z = org[2];
+    ray.dir_x = dir[0];
+    ray.dir_y = dir[1];
+    ray.dir_z = dir[2];
+    ray.tnear = tnear;
+    ray.tfar = tfar;
+    ray.mask = 0xFFFFFFFFu;
+    rtcOccluded1(scene_, &ctx, &ray);
+    return ray.tfar < 0;  // Embree marks an occluded ray with tfar = -inf
+  }
   const MeshArrays& arrays() const { return arrays_; }
+  // The triangle's geometric normal, right-handed with its vertex order (unnormalised).
+  Eigen::Vector3d face_normal(uint32_t prim) const {
+    const uint32_t* t = &arrays_.triangles[3 * static_cast<size_t>(prim)];
+    auto p = [&](int k) {
+      const float* c = &arrays_.positions[3 * static_cast<size_t>(t[k])];
+      return Eigen::Vector3d(c[0], c[1], c[2]);
+    };
+    return (p(1) - p(0)).cross(p(2) - p(0));
+  }
 
  private:
   MeshArrays arrays_;
@@ -92,7 +119,62 @@ class RayScene {
   RTCScene scene_ = nullptr;
 };
 
+// A hit along a texel's ray: signed distance from the base surface (positive outward),
+// whether the high surface faces the way the base does, and where on the high mesh.
+struct RayHit {
+  float d = 0;
+  bool front = true;
+  uint32_t prim = 0;
+  float u = 0, v = 0;
+};
+
+// The choice among a texel's hits (hits sorted by d). Returns the index of the hit that
+// gives the value, or -1 for a miss; sets `ambiguous`.
+int choose_hit(const std::vector<RayHit>& hits, HitRule rule, float bunch, bool& ambiguous) {
+  ambiguous = false;
+  const int n = static_cast<int>(hits.size());
+  if (n == 0) return -1;
+  bool any_front = false;
+  for (const RayHit& h : hits) any_front |= h.front;
+  if (rule == HitRule::front_only && !any_front) return -1;
+  const bool fronts_only = (rule == HitRule::front_only || rule == HitRule::front_else_nearest) && any_front;
+  // Bunches: maximal runs of hits closer than `bunch` to the previous one.
+  std::vector<int> bunch_of(static_cast<size_t>(n), 0);
+  for (int i = 1; i < n; ++i)
+    bunch_of[static_cast<size_t>(i)] = bunch_of[static_cast<size_t>(i - 1)] + (hits[static_cast<size_t>(i)].d - hits[static_cast<size_t>(i - 1)].d > bunch);
+  // Score (lower is better): |d| for the nearest rules, -|d| for the furthest; outward wins
+  // a tie.
+  auto score = [&](const RayHit& h) { return (rule == HitRule::furthest ? -1.0 : 1.0) * std::abs(h.d) - (h.d >= 0 ? 1e-30 : 0); };
+  int best = -1, second = -1;
+  for (int i = 0; i < n; ++i) {
+    if (fronts_only && !hits[static_cast<size_t>(i)].front) continue;
+    if (best < 0 || score(hits[static_cast<size_t>(i)]) < score(hits[static_cast<size_t>(best)])) best = i;
+  }
+  for (int i = 0; i < n; ++i) {
+    if ((fronts_only && !hits[static_cast<size_t>(i)].front) || bunch_of[static_cast<size_t>(i)] == bunch_of[static_cast<size_t>(best)]) continue;
+    if (second < 0 || score(hits[static_cast<size_t>(i)]) < score(hits[static_cast<size_t>(second)])) second = i;
+  }
+  ambiguous = second >= 0 && score(hits[static_cast<size_t>(second)]) - score(hits[static_cast<size_t>(best)]) < bunch;
+  // The value: the hit of the chosen bunch furthest from the base surface.
+  int pick = best;
+  for (int i = 0; i < n; ++i)
+    if (bunch_of[static_cast<size_t>(i)] == bunch_of[static_cast<size_t>(best)] &&
+        std::abs(hits[static_cast<size_t>(i)].d) > std::abs(hits[static_cast<size_t>(pick)].d))
+      pick = i;
+  return pick;
+}
+
 }  // namespace
+
+const char* hit_rule_name(HitRule r) {
+  switch (r) {
+    case HitRule::nearest: return "nearest";
+    case HitRule::furthest: return "furthest";
+    case HitRule::front_else_nearest: return "front-else-nearest";
+    case HitRule::front_only: return "front-only";
+  }
+  return "nearest";
+}
 
 BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progress& progress) {
   if (!has_uvs(low)) throw std::logic_error("bake: base mesh without UVs");
@@ -100,6 +182,7 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
   const float reach = 0.05f * bounding_box(high).diagonal();
   r.front = o.front > 0 ? o.front : reach;
   r.back = o.back > 0 ? o.back : reach;
+  r.bunch = o.bunch > 0 ? o.bunch : 0.001f * bounding_box(high).diagonal();
 
   // Ray start offset: far below the scale of any detail, far above float rounding of
   // coordinates relative to the base's centre.
@@ -116,11 +199,14 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
 
   r.displacement = Image(o.width, o.height, 1, 0.0f);
   r.normal_ts = Image(o.width, o.height, 3, 0.0f);
+  r.normal_os = Image(o.width, o.height, 3, 0.0f);
   std::vector<uint8_t> written(r.displacement.texel_count(), 0);
+  std::vector<uint8_t> ambiguous(r.displacement.texel_count(), 0);
   std::vector<uint8_t> covered(r.displacement.texel_count(), 0);
 
   progress.begin("bake", static_cast<uint64_t>(o.height));
   tbb::parallel_for(tbb::blocked_range<int>(0, o.height), [&](const tbb::blocked_range<int>& rows) {
+    std::vector<RayHit> hits;
     for (int y = rows.begin(); y < rows.end(); ++y) {
       for (int x = 0; x < o.width; ++x) {
         const size_t i = static_cast<size_t>(y) * static_cast<size_t>(o.width) + static_cast<size_t>(x);
@@ -153,13 +239,47 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
           const Eigen::Vector3d q = p + offset * dir;
           return Vec3f(static_cast<float>(q.x()), static_cast<float>(q.y()), static_cast<float>(q.z()));
         };
-        const auto out = scene.intersect(start_at(-eps), d, r.front + eps);
-        const auto in = scene.intersect(start_at(eps), -d, r.back + eps);
-        const float t_out = out.valid() ? out.t - eps : 0.0f, t_in = in.valid() ? in.t - eps : 0.0f;
-        const bool use_out = out.valid() && (!in.valid() || std::abs(t_out) <= std::abs(t_in));
-        const auto& hit = use_out ? out : in;
-        if (!hit.valid()) continue;
-        const float disp = use_out ? t_out : -t_in;
+        // The hits along one direction (sign +1 outward, -1 inward). Only what the rule can
+        // use is traced: the nearest rules stop after the first hit's bunch (continuations
+        // reach only `bunch` further, cheap rays); the others go on through the reach.
+        const bool all_hits = o.hit == HitRule::furthest;
+        auto gather = [&](int way, float limit) {
+          const Vec3f org = start_at(-way * eps);
+          const Vec3f dir_s = way > 0 ? d : -d;
+          float tnear = 0.0f, tfar = limit + eps;
+          bool found_front = false;
+          for (int k = 0; k < 16; ++k) {
+            const auto h = scene.intersect(org, dir_s, tnear, tfar);
+            if (!h.valid()) break;
+            RayHit rh;
+            rh.d = static_cast<float>(way) * (h.t - eps);
+            rh.front = scene.face_normal(h.prim).dot(dir) > 0;
+            rh.prim = h.prim;
+            rh.u = h.u;
+            rh.v = h.v;
+            // Past the hit (by a relative step that float coordinates resolve).
+            tnear = std::nextafter(h.t, tfar) + 1e-7f * (h.t + eps);
+            if (!(o.ignore_backfaces && !rh.front)) {
+              hits.push_back(rh);
+              found_front |= rh.front;
+              const bool done = !all_hits && (o.hit == HitRule::nearest || found_front);
+              if (done) tfar = std::min(tfar, h.t + r.bunch);  // only the bunch remains of interest
+              // Usually nothing is that close behind: an any-hit query says so for less.
+              if (done && (tnear >= tfar || !scene.occluded(org, dir_s, tnear, tfar))) break;
+            }
+            if (tnear >= tfar) break;
+          }
+        };
+        hits.clear();
+        gather(+1, r.front);
+        gather(-1, r.back);
+        std::sort(hits.begin(), hits.end(), [](const RayHit& p1, const RayHit& p2) { return p1.d < p2.d; });
+        bool unsure = false;
+        const int chosen = choose_hit(hits, o.hit, r.bunch, unsure);
+        if (chosen < 0) continue;
+        const RayHit& hit = hits[static_cast<size_t>(chosen)];
+        const float disp = hit.d;
+        ambiguous[i] = unsure;
         // High normal at the hit, Embree barycentrics: (1-u-v) v0 + u v1 + v v2.
         const uint32_t* tri = &scene.arrays().triangles[3 * static_cast<size_t>(hit.prim)];
         const Vec3f hn = high_normals[tri[0]] * (1.0f - hit.u - hit.v) + high_normals[tri[1]] * hit.u +
@@ -178,6 +298,8 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
         }
         r.displacement.at(x, y) = disp;
         for (int c = 0; c < 3; ++c) r.normal_ts.at(x, y, c) = static_cast<float>(m[c]);
+        const Eigen::Vector3d os = hnd.norm() > 0 ? hnd.normalized() : dir;
+        for (int c = 0; c < 3; ++c) r.normal_os.at(x, y, c) = static_cast<float>(os[c]);
         written[i] = 1;
       }
       progress.advance(1);
@@ -189,13 +311,16 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
   r.coverage = Image(o.width, o.height, 1, 0.0f);
   r.face_texels.assign(low.n_faces(), 0);
   r.face_misses.assign(low.n_faces(), 0);
+  r.face_ambiguous.assign(low.n_faces(), 0);
   for (size_t i = 0; i < written.size(); ++i) {
     r.covered_texels += covered[i];
     if (!covered[i]) continue;
     const size_t face = static_cast<size_t>(samples[i].face);
     ++r.face_texels[face];
-    r.coverage.pixels[i] = written[i] ? 1.0f : 0.5f;
+    r.coverage.pixels[i] = written[i] ? (ambiguous[i] ? 0.75f : 1.0f) : 0.5f;
     r.face_misses[face] += !written[i];
+    r.face_ambiguous[face] += written[i] && ambiguous[i];
+    r.ambiguous += written[i] && ambiguous[i];
     if (written[i]) {
       ++r.hits;
       const float d = r.displacement.pixels[i];
@@ -211,9 +336,14 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
   for (size_t i = 0; i < written.size(); ++i) {
     if (!written[i]) r.normal_ts.pixels[3 * i + 2] = 1.0f;
   }
+  // Unwritten object-space normals: the base normal would need the face; up (z) until the
+  // dilation reaches them.
+  for (size_t i = 0; i < written.size(); ++i)
+    if (!written[i]) r.normal_os.pixels[3 * i + 2] = 1.0f;
   const auto sources = dilation_sources(written, o.width, o.height, o.dilate);
   apply_dilation(r.displacement, sources);
   apply_dilation(r.normal_ts, sources);
+  apply_dilation(r.normal_os, sources);
 
   r.displacement.metadata = {{"quantity", std::string("displacement")},
                              {"units", std::string("object")},
@@ -221,9 +351,10 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
                              {"min", r.min_displacement},
                              {"max", r.max_displacement}};
   r.coverage.metadata = {{"quantity", std::string("coverage")},
-                         {"values", std::string("1 = hit, 0.5 = miss (covered, nothing within reach), 0 = outside the charts")}};
+                         {"values", std::string("1 = hit, 0.75 = ambiguous hit, 0.5 = miss (covered, nothing within reach), 0 = outside the charts")}};
   r.normal_ts.metadata = {{"quantity", std::string("normal")},
                           {"space", std::string("tangent (MikkTSpace, +y = +v)")}};
+  r.normal_os.metadata = {{"quantity", std::string("normal")}, {"space", std::string("object")}};
   return r;
 }
 

@@ -82,6 +82,87 @@ TEST(Bake, HugeCoordinatesKeepSmallDisplacementsExact) {
     }
 }
 
+// Several horizontal planes z = c over [-0.5, 1.5]^2 in one mesh; `up` false flips a
+// plane's faces (it then faces -z, against the base).
+Mesh make_layers(const std::vector<std::pair<float, bool>>& layers) {
+  Mesh out;
+  for (const auto& [z, up] : layers) {
+    const Mesh m = make_plane(0, 0, z);
+    std::vector<VertexHandle> map;
+    for (auto v : m.vertices()) map.push_back(out.add_vertex(m.point(v)));
+    for (auto f : m.faces()) {
+      std::vector<VertexHandle> vs;
+      for (auto v : m.fv_range(f)) vs.push_back(map[static_cast<size_t>(v.idx())]);
+      if (!up) std::reverse(vs.begin(), vs.end());
+      out.add_face(vs);
+    }
+  }
+  compute_angle_weighted_normals(out);
+  return out;
+}
+
+// The value every covered texel of a flat base (z = 0, normal +z) gets over `high`.
+float baked_value(const Mesh& high, const BakeOptions& base_options, size_t* ambiguous = nullptr) {
+  BakeOptions o = base_options;
+  o.width = o.height = 8;
+  o.front = o.back = 0.05f;
+  if (o.bunch <= 0) o.bunch = 0.001f;
+  const BakeResult r = bake(test::make_grid(2, 2), high, o);
+  EXPECT_EQ(r.misses, 0u);
+  if (ambiguous) *ambiguous = r.ambiguous;
+  const float v = r.displacement.at(4, 4);
+  for (float d : r.displacement.pixels) EXPECT_EQ(d, v);
+  return v;
+}
+
+// Layers above and below the base at known heights: each rule picks the one it names.
+TEST(Bake, HitRulesPickTheLayerTheyName) {
+  // Front-facing layers at +0.02 and -0.01, a back-facing one at +0.005.
+  const Mesh high = make_layers({{0.02f, true}, {-0.01f, true}, {0.005f, false}});
+  BakeOptions o;
+  o.hit = HitRule::nearest;
+  EXPECT_NEAR(baked_value(high, o), 0.005f, 1e-6f);
+  o.hit = HitRule::furthest;
+  EXPECT_NEAR(baked_value(high, o), 0.02f, 1e-6f);
+  o.hit = HitRule::front_else_nearest;
+  EXPECT_NEAR(baked_value(high, o), -0.01f, 1e-6f);
+  o.hit = HitRule::front_only;
+  EXPECT_NEAR(baked_value(high, o), -0.01f, 1e-6f);
+  o.hit = HitRule::nearest;
+  o.ignore_backfaces = true;
+  EXPECT_NEAR(baked_value(high, o), -0.01f, 1e-6f);
+  // Only back faces: front-only misses everywhere.
+  BakeOptions only;
+  only.hit = HitRule::front_only;
+  only.width = only.height = 8;
+  const BakeResult r = bake(test::make_grid(2, 2), make_layers({{0.01f, false}}), only);
+  EXPECT_EQ(r.hits, 0u);
+  EXPECT_EQ(r.misses, r.covered_texels);
+}
+
+// A decal floating just above the surface (closer than the bunch distance): the outermost
+// of the bunch wins; two candidates as near as each other on both sides are reported.
+TEST(Bake, BunchesTakeTheirOutermostHitAndTiesAreAmbiguous) {
+  BakeOptions o;
+  size_t ambiguous = 0;
+  EXPECT_NEAR(baked_value(make_layers({{0.010f, true}, {0.0105f, true}, {-0.03f, true}}), o, &ambiguous), 0.0105f, 1e-6f);
+  EXPECT_EQ(ambiguous, 0u);
+  EXPECT_NEAR(baked_value(make_layers({{0.010f, true}, {-0.0102f, true}}), o, &ambiguous), 0.010f, 1e-6f);
+  EXPECT_EQ(ambiguous, 64u) << "0.0100 out and 0.0102 in are within the bunch distance of each other";
+  EXPECT_NEAR(baked_value(make_layers({{0.010f, true}, {-0.015f, true}}), o, &ambiguous), 0.010f, 1e-6f);
+  EXPECT_EQ(ambiguous, 0u);
+}
+
+// Object-space normals are the high surface's: a tilted plane's normal everywhere.
+TEST(Bake, ObjectSpaceNormalsAreTheHighSurfaces) {
+  BakeOptions o;
+  o.width = o.height = 16;
+  const BakeResult r = bake(test::make_grid(2, 2), make_plane(0.3f, -0.2f, 0.01f), o);
+  const Vec3f n = Vec3f(-0.3f, 0.2f, 1.0f).normalized();
+  for (size_t i = 0; i < r.normal_os.texel_count(); ++i)
+    for (int c = 0; c < 3; ++c) ASSERT_NEAR(r.normal_os.pixels[3 * i + static_cast<size_t>(c)], n[c], 1e-5f) << i;
+}
+
 TEST(Bake, IdenticalMeshesGiveZeroAndFlatNormals) {
   const Mesh cube = test::make_seamed_cube();
   BakeOptions o;

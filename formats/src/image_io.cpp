@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdint>
 #include <memory>
 
@@ -102,7 +103,7 @@ void check_writable(const Image& image, const std::string& name) {
   }
 }
 
-OIIO::ImageSpec spec_of(const Image& image, PixelFormat format, const ImageMetadata& metadata) {
+OIIO::ImageSpec spec_of(const Image& image, PixelFormat format, const ImageMetadata& metadata, bool text_only = false) {
   OIIO::ImageSpec spec(image.width, image.height, image.channels, type_of(format));
   spec.attribute("oiio:UnassociatedAlpha", 1);
   if (format == PixelFormat::float32 || format == PixelFormat::half) spec.attribute("compression", "zip");
@@ -111,7 +112,15 @@ OIIO::ImageSpec spec_of(const Image& image, PixelFormat format, const ImageMetad
   spec.attribute("DateTime", "");
   for (const auto& [k, v] : metadata) {
     const std::string key = std::string(kPrefix) + k;
-    if (const int* i = std::get_if<int>(&v)) spec.attribute(key, *i);
+    if (text_only) {
+      // PNG keeps text chunks only: numbers as text, floats round-trippable ("%.9g").
+      char buffer[32];
+      if (const int* i = std::get_if<int>(&v)) spec.attribute(key, std::to_string(*i));
+      else if (const float* f = std::get_if<float>(&v)) {
+        std::snprintf(buffer, sizeof buffer, "%.9g", static_cast<double>(*f));
+        spec.attribute(key, std::string(buffer));
+      } else spec.attribute(key, std::get<std::string>(v));
+    } else if (const int* i = std::get_if<int>(&v)) spec.attribute(key, *i);
     else if (const float* f = std::get_if<float>(&v)) spec.attribute(key, *f);
     else spec.attribute(key, std::get<std::string>(v));
   }
@@ -137,7 +146,9 @@ void write_image(const Image& image, const fs::path& path, PixelFormat format) {
   check_writable(image, name);
   auto out = OIIO::ImageOutput::create(name);
   if (!out) throw InternalError(name + ": no image writer for this extension");
-  const OIIO::ImageSpec spec = spec_of(image, format, image.metadata);
+  std::string extension = path.extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  const OIIO::ImageSpec spec = spec_of(image, format, image.metadata, extension == ".png");
   if (!out->open(name, spec)) throw InternalError(name + ": cannot open for writing: " + out->geterror());
   if (!write_pixels(*out, image, format) || !out->close()) throw InternalError(name + ": cannot write image: " + out->geterror());
 }

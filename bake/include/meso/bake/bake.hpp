@@ -14,12 +14,31 @@
 
 namespace meso {
 
+// Which of the hits along a texel's ray (both ways from the base surface, within reach)
+// gives its value. A hit is front-facing when the high surface there faces the way the base
+// does (geometric normal . base normal > 0).
+enum class HitRule {
+  nearest,             // the hit nearest to the base surface (outward on a tie)
+  furthest,            // the hit furthest from it
+  front_else_nearest,  // the nearest front-facing hit, else the nearest
+  front_only,          // the nearest front-facing hit, else a miss
+};
+const char* hit_rule_name(HitRule r);
+
 struct BakeOptions {
   int width = 1024, height = 1024;
   // Ray reach in object units in front of (along +normal) and behind the base surface.
   // <= 0: 5 % of the high mesh's bounding-box diagonal.
   float front = 0.0f, back = 0.0f;
   int dilate = -1;  // texels to fill around charts; < 0 fills the whole image
+  HitRule hit = HitRule::nearest;
+  bool ignore_backfaces = false;  // drop hits on high surfaces facing against the base
+  // Hits closer than this to each other along a ray form a bunch (a fold, a decal floating
+  // just above the surface): the rule picks a hit, and the value comes from the hit of its
+  // bunch furthest from the base surface. Two candidates the rule ranks within this
+  // distance of each other, in different bunches, make the texel ambiguous (reported).
+  // Object units; <= 0: 0.1 % of the high mesh's bounding-box diagonal.
+  float bunch = 0.0f;
 };
 
 struct BakeResult {
@@ -29,14 +48,21 @@ struct BakeResult {
   // The high mesh's normal in the base's tangent space (tangent_frame.hpp), components in
   // [-1, 1], three channels; (0, 0, 1) where the surfaces are parallel.
   Image normal_ts;
-  // Where the rays found the high surface: 1 channel, 1 = hit, 0.5 = covered by a base face
-  // but no hit within reach (a miss), 0 = outside every chart.
+  // Where the rays found the high surface: 1 channel, 1 = hit, 0.75 = a hit whose choice
+  // was ambiguous, 0.5 = covered by a base face but no hit within reach (a miss), 0 =
+  // outside every chart.
   Image coverage;
   size_t covered_texels = 0;  // texels some UV triangle touches (rasterize_uv), misses included
   size_t hits = 0, misses = 0;
-  // Per base face (face order): covered texels and misses, for the artist's report.
-  std::vector<uint32_t> face_texels, face_misses;
+  size_t ambiguous = 0;  // hits whose choice was ambiguous (counted in hits too)
+  // Per base face (face order): covered texels, misses and ambiguous texels, for the
+  // artist's report.
+  std::vector<uint32_t> face_texels, face_misses, face_ambiguous;
   float front = 0, back = 0;  // the reach actually used
+  float bunch = 0;            // the bunch distance actually used
+  // The high surface's normal at each texel's hit in object space (unit, three channels;
+  // dilated like the others).
+  Image normal_os;
   float min_displacement = 0, max_displacement = 0;  // over hits
 };
 
