@@ -51,7 +51,7 @@ void add_bake(CLI::App& app, Context& ctx) {
     std::string low, high, out_dir, size = "1024", front, back, bunch, hit = "nearest";
     std::string maps = "displacement,normal_ts,coverage";
     float max_miss_rate = 1;
-    int dilate = -1;
+    int dilate = -1, samples = 1;
     bool ignore_backfaces = false;
   };
   auto args = std::make_shared<Args>();
@@ -72,6 +72,11 @@ void add_bake(CLI::App& app, Context& ctx) {
   sub->add_option("--hit", args->hit, "Which hit gives a texel its value: nearest, furthest, front-else-nearest, front-only")
       ->check(CLI::IsMember({"nearest", "furthest", "front-else-nearest", "front-only"}))
       ->capture_default_str();
+  sub->add_option("--samples", args->samples,
+                  "Samples per texel, rounded to a square n x n (stratified, box-filtered; samples may fall on neighbouring "
+                  "triangles of the texel's chart)")
+      ->check(CLI::Range(1, 256))
+      ->capture_default_str();
   sub->add_flag("--ignore-backfaces", args->ignore_backfaces, "Ignore high surfaces that face against the base surface");
   sub->add_option("--bunch", args->bunch,
                   "Hits closer than this form one bunch (a fold, a decal): its outermost hit is taken; object units or a "
@@ -88,6 +93,7 @@ void add_bake(CLI::App& app, Context& ctx) {
       for (const HitRule rule : {HitRule::nearest, HitRule::furthest, HitRule::front_else_nearest, HitRule::front_only})
         if (args->hit == hit_rule_name(rule)) o.hit = rule;
       o.ignore_backfaces = args->ignore_backfaces;
+      o.samples = args->samples;
       std::vector<std::string> wanted;
       {
         std::stringstream list(args->maps);
@@ -149,6 +155,7 @@ void add_bake(CLI::App& app, Context& ctx) {
                 {"front", r.front},
                 {"back", r.back},
                 {"bunch", r.bunch},
+                {"samples", r.samples},
                 {"hit_rule", hit_rule_name(o.hit)},
                 {"ignore_backfaces", o.ignore_backfaces},
                 {"ambiguous", r.ambiguous},

@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 
 namespace meso {
 
@@ -205,101 +206,158 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
   std::vector<uint8_t> covered(r.displacement.texel_count(), 0);
 
   progress.begin("bake", static_cast<uint64_t>(o.height));
+  // One sample: the base point of `face` at barycentrics `bary` (face_halfedges order);
+  // false when its rays find nothing the hit rule accepts.
+  struct SampleValue {
+    double disp = 0;
+    Eigen::Vector3d ts, os;
+    bool ambiguous = false;
+  };
+  auto trace = [&](int face, const std::array<float, 3>& bary, std::vector<RayHit>& hits, SampleValue& value) -> bool {
+    const TexelSample s{face, bary, true};
+    const auto hs = face_halfedges(low, FaceHandle(s.face));
+    // Interpolated position, normal and MikkTSpace frame (unnormalised, as the shader).
+    Eigen::Vector3d p = Eigen::Vector3d::Zero(), n = Eigen::Vector3d::Zero(), t = Eigen::Vector3d::Zero();
+    for (int k = 0; k < 3; ++k) {
+      const auto h = hs[static_cast<size_t>(k)];
+      const auto v = low.to_vertex_handle(h);
+      const double w = s.bary[static_cast<size_t>(k)];
+      const Vec3f& pv = low.point(v);
+      const Vec3f& nv = low.normal(v);
+      const Vec3f& tv = frames[static_cast<size_t>(h.idx())].tangent;
+      p += w * (Eigen::Vector3d(pv[0], pv[1], pv[2]) - origin);
+      n += w * Eigen::Vector3d(nv[0], nv[1], nv[2]);
+      t += w * Eigen::Vector3d(tv[0], tv[1], tv[2]);
+    }
+    const double sign = frames[static_cast<size_t>(hs[0].idx())].sign;
+    const Eigen::Vector3d b = sign * n.cross(t);
+    if (!(n.norm() > 1e-12)) return false;  // opposite normals cancel: no direction to cast along
+    const Eigen::Vector3d dir = n.normalized();
+    const Vec3f d(static_cast<float>(dir.x()), static_cast<float>(dir.y()), static_cast<float>(dir.z()));
+    // Both ways from the base surface; the hit nearer to it wins (outward on a tie).
+    // Each ray starts `eps` behind the base point so that a high surface lying exactly
+    // on the base (high = low) is found by both, at distance 0.
+    auto start_at = [&](double offset) {
+      const Eigen::Vector3d q = p + offset * dir;
+      return Vec3f(static_cast<float>(q.x()), static_cast<float>(q.y()), static_cast<float>(q.z()));
+    };
+    // The hits along one direction (sign +1 outward, -1 inward). Only what the rule can
+    // use is traced: the nearest rules stop after the first hit's bunch (continuations
+    // reach only `bunch` further, cheap rays); the others go on through the reach.
+    const bool all_hits = o.hit == HitRule::furthest;
+    auto gather = [&](int way, float limit) {
+      const Vec3f org = start_at(-way * eps);
+      const Vec3f dir_s = way > 0 ? d : -d;
+      float tnear = 0.0f, tfar = limit + eps;
+      bool found_front = false;
+      for (int k = 0; k < 16; ++k) {
+        const auto h = scene.intersect(org, dir_s, tnear, tfar);
+        if (!h.valid()) break;
+        RayHit rh;
+        rh.d = static_cast<float>(way) * (h.t - eps);
+        rh.front = scene.face_normal(h.prim).dot(dir) > 0;
+        rh.prim = h.prim;
+        rh.u = h.u;
+        rh.v = h.v;
+        // Past the hit (by a relative step that float coordinates resolve).
+        tnear = std::nextafter(h.t, tfar) + 1e-7f * (h.t + eps);
+        if (!(o.ignore_backfaces && !rh.front)) {
+          hits.push_back(rh);
+          found_front |= rh.front;
+          const bool done = !all_hits && (o.hit == HitRule::nearest || found_front);
+          if (done) tfar = std::min(tfar, h.t + r.bunch);  // only the bunch remains of interest
+          // Usually nothing is that close behind: an any-hit query says so for less.
+          if (done && (tnear >= tfar || !scene.occluded(org, dir_s, tnear, tfar))) break;
+        }
+        if (tnear >= tfar) break;
+      }
+    };
+    hits.clear();
+    gather(+1, r.front);
+    gather(-1, r.back);
+    std::sort(hits.begin(), hits.end(), [](const RayHit& p1, const RayHit& p2) { return p1.d < p2.d; });
+    bool unsure = false;
+    const int chosen = choose_hit(hits, o.hit, r.bunch, unsure);
+    if (chosen < 0) return false;
+    const RayHit& hit = hits[static_cast<size_t>(chosen)];
+    const float disp = hit.d;
+    // High normal at the hit, Embree barycentrics: (1-u-v) v0 + u v1 + v v2.
+    const uint32_t* tri = &scene.arrays().triangles[3 * static_cast<size_t>(hit.prim)];
+    const Vec3f hn = high_normals[tri[0]] * (1.0f - hit.u - hit.v) + high_normals[tri[1]] * hit.u +
+                     high_normals[tri[2]] * hit.v;
+    Eigen::Matrix3d tbn;
+    tbn.col(0) = t;
+    tbn.col(1) = b;
+    tbn.col(2) = n;
+    Eigen::Vector3d m(0, 0, 1);
+    const Eigen::Vector3d hnd(hn[0], hn[1], hn[2]);
+    const double det = tbn.determinant();
+    if (std::abs(det) > 1e-12 && hnd.norm() > 0) {
+      m = tbn.inverse() * hnd;  // exact inverse of the decoder's matrix
+      if (m.norm() > 0) m.normalize();
+      else m = Eigen::Vector3d(0, 0, 1);
+    }
+    value.disp = disp;
+    value.ts = m;
+    value.os = hnd.norm() > 0 ? hnd.normalized() : dir;
+    value.ambiguous = unsure;
+    return true;
+  };
+
+  // Supersampling: n x n stratified samples per texel at the centres of its n x n sub-texels,
+  // located by rasterising the UV layout at n times the resolution (a band of rows at a
+  // time). A sample counts when its point lies inside a face of the texel's own chart (it
+  // may be a neighbouring triangle's); a texel with none (a border texel) keeps its single
+  // sample at the chart's point nearest to its centre.
+  const int sub = std::max(1, static_cast<int>(std::lround(std::sqrt(static_cast<double>(std::max(1, o.samples))))));
+  r.samples = sub * sub;
+  std::unique_ptr<UvRasterizer> fine;
+  std::vector<int> chart;
+  if (sub > 1) {
+    fine = std::make_unique<UvRasterizer>(low, o.width * sub, o.height * sub);
+    chart = uv_charts(low);
+  }
+
   tbb::parallel_for(tbb::blocked_range<int>(0, o.height), [&](const tbb::blocked_range<int>& rows) {
     std::vector<RayHit> hits;
     for (int y = rows.begin(); y < rows.end(); ++y) {
+      std::vector<TexelSample> band;
+      if (fine) band = fine->rows(y * sub, (y + 1) * sub);
       for (int x = 0; x < o.width; ++x) {
         const size_t i = static_cast<size_t>(y) * static_cast<size_t>(o.width) + static_cast<size_t>(x);
         const TexelSample& s = samples[i];
         if (s.face < 0) continue;
         covered[i] = 1;
-        const auto hs = face_halfedges(low, FaceHandle(s.face));
-        // Interpolated position, normal and MikkTSpace frame (unnormalised, as the shader).
-        Eigen::Vector3d p = Eigen::Vector3d::Zero(), n = Eigen::Vector3d::Zero(), t = Eigen::Vector3d::Zero();
-        for (int k = 0; k < 3; ++k) {
-          const auto h = hs[static_cast<size_t>(k)];
-          const auto v = low.to_vertex_handle(h);
-          const double w = s.bary[static_cast<size_t>(k)];
-          const Vec3f& pv = low.point(v);
-          const Vec3f& nv = low.normal(v);
-          const Vec3f& tv = frames[static_cast<size_t>(h.idx())].tangent;
-          p += w * (Eigen::Vector3d(pv[0], pv[1], pv[2]) - origin);
-          n += w * Eigen::Vector3d(nv[0], nv[1], nv[2]);
-          t += w * Eigen::Vector3d(tv[0], tv[1], tv[2]);
-        }
-        const double sign = frames[static_cast<size_t>(hs[0].idx())].sign;
-        const Eigen::Vector3d b = sign * n.cross(t);
-        if (!(n.norm() > 1e-12)) continue;  // opposite normals cancel: no direction to cast along
-        const Eigen::Vector3d dir = n.normalized();
-        const Vec3f d(static_cast<float>(dir.x()), static_cast<float>(dir.y()), static_cast<float>(dir.z()));
-        // Both ways from the base surface; the hit nearer to it wins (outward on a tie).
-        // Each ray starts `eps` behind the base point so that a high surface lying exactly
-        // on the base (high = low) is found by both, at distance 0.
-        auto start_at = [&](double offset) {
-          const Eigen::Vector3d q = p + offset * dir;
-          return Vec3f(static_cast<float>(q.x()), static_cast<float>(q.y()), static_cast<float>(q.z()));
-        };
-        // The hits along one direction (sign +1 outward, -1 inward). Only what the rule can
-        // use is traced: the nearest rules stop after the first hit's bunch (continuations
-        // reach only `bunch` further, cheap rays); the others go on through the reach.
-        const bool all_hits = o.hit == HitRule::furthest;
-        auto gather = [&](int way, float limit) {
-          const Vec3f org = start_at(-way * eps);
-          const Vec3f dir_s = way > 0 ? d : -d;
-          float tnear = 0.0f, tfar = limit + eps;
-          bool found_front = false;
-          for (int k = 0; k < 16; ++k) {
-            const auto h = scene.intersect(org, dir_s, tnear, tfar);
-            if (!h.valid()) break;
-            RayHit rh;
-            rh.d = static_cast<float>(way) * (h.t - eps);
-            rh.front = scene.face_normal(h.prim).dot(dir) > 0;
-            rh.prim = h.prim;
-            rh.u = h.u;
-            rh.v = h.v;
-            // Past the hit (by a relative step that float coordinates resolve).
-            tnear = std::nextafter(h.t, tfar) + 1e-7f * (h.t + eps);
-            if (!(o.ignore_backfaces && !rh.front)) {
-              hits.push_back(rh);
-              found_front |= rh.front;
-              const bool done = !all_hits && (o.hit == HitRule::nearest || found_front);
-              if (done) tfar = std::min(tfar, h.t + r.bunch);  // only the bunch remains of interest
-              // Usually nothing is that close behind: an any-hit query says so for less.
-              if (done && (tnear >= tfar || !scene.occluded(org, dir_s, tnear, tfar))) break;
-            }
-            if (tnear >= tfar) break;
-          }
-        };
-        hits.clear();
-        gather(+1, r.front);
-        gather(-1, r.back);
-        std::sort(hits.begin(), hits.end(), [](const RayHit& p1, const RayHit& p2) { return p1.d < p2.d; });
+        SampleValue sum, one;
+        sum.ts = sum.os = Eigen::Vector3d::Zero();
+        int count = 0;
         bool unsure = false;
-        const int chosen = choose_hit(hits, o.hit, r.bunch, unsure);
-        if (chosen < 0) continue;
-        const RayHit& hit = hits[static_cast<size_t>(chosen)];
-        const float disp = hit.d;
-        ambiguous[i] = unsure;
-        // High normal at the hit, Embree barycentrics: (1-u-v) v0 + u v1 + v v2.
-        const uint32_t* tri = &scene.arrays().triangles[3 * static_cast<size_t>(hit.prim)];
-        const Vec3f hn = high_normals[tri[0]] * (1.0f - hit.u - hit.v) + high_normals[tri[1]] * hit.u +
-                         high_normals[tri[2]] * hit.v;
-        Eigen::Matrix3d tbn;
-        tbn.col(0) = t;
-        tbn.col(1) = b;
-        tbn.col(2) = n;
-        Eigen::Vector3d m(0, 0, 1);
-        const Eigen::Vector3d hnd(hn[0], hn[1], hn[2]);
-        const double det = tbn.determinant();
-        if (std::abs(det) > 1e-12 && hnd.norm() > 0) {
-          m = tbn.inverse() * hnd;  // exact inverse of the decoder's matrix
-          if (m.norm() > 0) m.normalize();
-          else m = Eigen::Vector3d(0, 0, 1);
+        for (int b = 0; b < sub && fine; ++b)
+          for (int a = 0; a < sub; ++a) {
+            const TexelSample& f = band[static_cast<size_t>(b) * static_cast<size_t>(o.width * sub) + static_cast<size_t>(x * sub + a)];
+            if (f.face < 0 || !f.centre_inside || chart[static_cast<size_t>(f.face)] != chart[static_cast<size_t>(s.face)]) continue;
+            if (!trace(f.face, f.bary, hits, one)) continue;
+            sum.disp += one.disp;
+            sum.ts += one.ts;
+            sum.os += one.os;
+            unsure |= one.ambiguous;
+            ++count;
+          }
+        if (count == 0) {
+          if (!trace(s.face, s.bary, hits, one)) continue;
+          sum = one;
+          unsure = one.ambiguous;
+          count = 1;
         }
-        r.displacement.at(x, y) = disp;
-        for (int c = 0; c < 3; ++c) r.normal_ts.at(x, y, c) = static_cast<float>(m[c]);
-        const Eigen::Vector3d os = hnd.norm() > 0 ? hnd.normalized() : dir;
-        for (int c = 0; c < 3; ++c) r.normal_os.at(x, y, c) = static_cast<float>(os[c]);
+        // The box filter: mean displacement, mean normal renormalised.
+        const Eigen::Vector3d ts = sum.ts.norm() > 0 ? Eigen::Vector3d(sum.ts.normalized()) : Eigen::Vector3d(0, 0, 1);
+        const Eigen::Vector3d os = sum.os.norm() > 0 ? Eigen::Vector3d(sum.os.normalized()) : Eigen::Vector3d(0, 0, 1);
+        r.displacement.at(x, y) = static_cast<float>(sum.disp / count);
+        for (int c = 0; c < 3; ++c) {
+          r.normal_ts.at(x, y, c) = static_cast<float>(ts[c]);
+          r.normal_os.at(x, y, c) = static_cast<float>(os[c]);
+        }
+        ambiguous[i] = unsure;
         written[i] = 1;
       }
       progress.advance(1);

@@ -163,6 +163,37 @@ TEST(Bake, ObjectSpaceNormalsAreTheHighSurfaces) {
     for (int c = 0; c < 3; ++c) ASSERT_NEAR(r.normal_os.pixels[3 * i + static_cast<size_t>(c)], n[c], 1e-5f) << i;
 }
 
+// Supersampling: a step in the high surface a quarter of the way into a texel. With 4 x 4
+// samples the texel gets the area-weighted mean (1/4 low, 3/4 high, exactly, since the
+// samples sit at the sub-texel centres); with 1 sample its centre's side.
+TEST(Bake, SupersamplingAveragesOverTheTexel) {
+  const float step = 3.0f / 8.0f + 1.0f / 32.0f, rise = 0.01f;
+  Mesh high;
+  auto add_rect = [&](float x0, float x1, float z) {
+    const VertexHandle a = high.add_vertex(Vec3f(x0, -0.5f, z)), b = high.add_vertex(Vec3f(x1, -0.5f, z));
+    const VertexHandle c = high.add_vertex(Vec3f(x1, 1.5f, z)), d = high.add_vertex(Vec3f(x0, 1.5f, z));
+    high.add_face(a, b, c);
+    high.add_face(a, c, d);
+  };
+  add_rect(-0.5f, step, 0.0f);
+  add_rect(step, 1.5f, rise);
+  compute_angle_weighted_normals(high);
+  BakeOptions o;
+  o.width = o.height = 8;
+  o.front = o.back = 0.05f;
+  o.samples = 16;
+  const BakeResult r = bake(test::make_grid(2, 2), high, o);
+  EXPECT_EQ(r.samples, 16);
+  for (int y = 0; y < 8; ++y) {
+    EXPECT_NEAR(r.displacement.at(2, y), 0.0f, 1e-6f);
+    EXPECT_NEAR(r.displacement.at(3, y), 0.75f * rise, 1e-6f);
+    EXPECT_NEAR(r.displacement.at(4, y), rise, 1e-6f);
+  }
+  o.samples = 1;
+  const BakeResult single = bake(test::make_grid(2, 2), high, o);
+  EXPECT_NEAR(single.displacement.at(3, 0), rise, 1e-6f) << "the centre 0.4375 lies right of the step";
+}
+
 TEST(Bake, IdenticalMeshesGiveZeroAndFlatNormals) {
   const Mesh cube = test::make_seamed_cube();
   BakeOptions o;

@@ -1,6 +1,8 @@
 #include "meso/core/mesh.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <numeric>
 
 namespace meso {
 namespace {
@@ -109,6 +111,33 @@ float uv_double_area(const Mesh& mesh, FaceHandle f) {
   const auto hs = face_halfedges(mesh, f);
   const Vec2f a = mesh.texcoord2D(hs[0]), b = mesh.texcoord2D(hs[1]), c = mesh.texcoord2D(hs[2]);
   return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+}
+
+std::vector<int> uv_charts(const Mesh& mesh, size_t* count) {
+  std::vector<int> parent(mesh.n_faces());
+  std::iota(parent.begin(), parent.end(), 0);
+  auto find = [&](int x) {
+    while (parent[static_cast<size_t>(x)] != x) {
+      parent[static_cast<size_t>(x)] = parent[static_cast<size_t>(parent[static_cast<size_t>(x)])];
+      x = parent[static_cast<size_t>(x)];
+    }
+    return x;
+  };
+  for (auto e : mesh.edges()) {
+    if (mesh.is_boundary(e) || is_uv_seam(mesh, e)) continue;
+    const int a = find(mesh.face_handle(mesh.halfedge_handle(e, 0)).idx());
+    const int b = find(mesh.face_handle(mesh.halfedge_handle(e, 1)).idx());
+    if (a != b) parent[static_cast<size_t>(std::max(a, b))] = std::min(a, b);
+  }
+  std::vector<int> chart(mesh.n_faces(), -1), label(mesh.n_faces(), -1);
+  int next = 0;
+  for (size_t f = 0; f < mesh.n_faces(); ++f) {
+    const int r = find(static_cast<int>(f));
+    if (label[static_cast<size_t>(r)] < 0) label[static_cast<size_t>(r)] = next++;
+    chart[f] = label[static_cast<size_t>(r)];
+  }
+  if (count) *count = static_cast<size_t>(next);
+  return chart;
 }
 
 }  // namespace meso

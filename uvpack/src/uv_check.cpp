@@ -9,33 +9,6 @@
 
 namespace meso {
 
-std::vector<int> uv_charts(const Mesh& mesh, size_t* count) {
-  std::vector<int> parent(mesh.n_faces());
-  std::iota(parent.begin(), parent.end(), 0);
-  auto find = [&](int x) {
-    while (parent[static_cast<size_t>(x)] != x) {
-      parent[static_cast<size_t>(x)] = parent[static_cast<size_t>(parent[static_cast<size_t>(x)])];
-      x = parent[static_cast<size_t>(x)];
-    }
-    return x;
-  };
-  for (auto e : mesh.edges()) {
-    if (mesh.is_boundary(e) || is_uv_seam(mesh, e)) continue;
-    const int a = find(mesh.face_handle(mesh.halfedge_handle(e, 0)).idx());
-    const int b = find(mesh.face_handle(mesh.halfedge_handle(e, 1)).idx());
-    if (a != b) parent[static_cast<size_t>(std::max(a, b))] = std::min(a, b);
-  }
-  std::vector<int> chart(mesh.n_faces(), -1), label(mesh.n_faces(), -1);
-  int next = 0;
-  for (size_t f = 0; f < mesh.n_faces(); ++f) {
-    const int r = find(static_cast<int>(f));
-    if (label[static_cast<size_t>(r)] < 0) label[static_cast<size_t>(r)] = next++;
-    chart[f] = label[static_cast<size_t>(r)];
-  }
-  if (count) *count = static_cast<size_t>(next);
-  return chart;
-}
-
 UvCheckReport check_uv_mapping(const Mesh& mesh, const UvCheckOptions& o) {
   UvCheckReport r;
   r.width = r.height = o.size;

@@ -39,6 +39,10 @@ struct BakeOptions {
   // distance of each other, in different bunches, make the texel ambiguous (reported).
   // Object units; <= 0: 0.1 % of the high mesh's bounding-box diagonal.
   float bunch = 0.0f;
+  // Samples per texel, rounded to a square n x n: stratified at the centres of the texel's
+  // n x n sub-texels, box-filtered (mean displacement, mean normal renormalised). Samples
+  // may fall on any face of the texel's chart; 1 samples the texel centre exactly.
+  int samples = 1;
 };
 
 struct BakeResult {
@@ -60,6 +64,7 @@ struct BakeResult {
   std::vector<uint32_t> face_texels, face_misses, face_ambiguous;
   float front = 0, back = 0;  // the reach actually used
   float bunch = 0;            // the bunch distance actually used
+  int samples = 1;            // samples per texel actually used (a square)
   // The high surface's normal at each texel's hit in object space (unit, three channels;
   // dilated like the others).
   Image normal_os;

@@ -27,4 +27,23 @@ struct TexelSample {
 // Faces with zero UV area cover nothing. Row-major, top row first.
 std::vector<TexelSample> rasterize_uv(const Mesh& mesh, int width, int height);
 
+// The same rules, a band of rows at a time: the faces' UV triangles are prepared once, and
+// rows(y0, y1) returns rows [y0, y1) of rasterize_uv's result (row-major, y0 first) without
+// the memory of the whole image (supersampled bakes rasterise at K times the resolution).
+// Thread-safe: rows() only reads.
+class UvRasterizer {
+ public:
+  UvRasterizer(const Mesh& mesh, int width, int height);
+  std::vector<TexelSample> rows(int y0, int y1) const;
+
+ private:
+  struct Face {
+    int index;
+    double px[3], py[3], area;
+    double x_min, x_max, y_min, y_max;  // pixel bounds of the UV triangle
+  };
+  int width_, height_;
+  std::vector<Face> faces_;  // faces with UV area, in face order
+};
+
 }  // namespace meso

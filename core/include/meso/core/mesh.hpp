@@ -77,6 +77,10 @@ inline bool same_uv(const Mesh& mesh, HalfedgeHandle a, HalfedgeHandle b) {
 // edges are not seams (they have one side).
 bool is_uv_seam(const Mesh& mesh, Mesh::EdgeHandle e);
 
+// Charts: faces connected through edges whose two sides carry the same UVs. Returns a chart
+// index per face, numbered by first face in face order; `count` receives the number.
+std::vector<int> uv_charts(const Mesh& mesh, size_t* count = nullptr);
+
 // A unit vector perpendicular to the unit vector n, continuous except across n.z = 0's sign
 // flip (Duff et al. 2017, "Building an Orthonormal Basis, Revisited").
 inline OpenMesh::Vec3d any_perpendicular(const OpenMesh::Vec3d& n) {

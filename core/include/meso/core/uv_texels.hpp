@@ -21,12 +21,15 @@ UvTriangle uv_triangle_in_pixels(const Mesh& mesh, FaceHandle f, int width, int 
 // ring of texels around the touched ones: see uv_check.hpp on padding.)
 bool triangle_overlaps_texel(const UvTriangle& t, int x, int y);
 
-// Calls fn(x, y) for every texel of a width x height grid the triangle touches, row by row.
+// Calls fn(x, y) for every texel of a width x height grid the triangle touches, row by row;
+// only rows [row0, row1) when given.
 template <class Fn>
-void for_each_touched_texel(const UvTriangle& t, int width, int height, Fn&& fn) {
+void for_each_touched_texel(const UvTriangle& t, int width, int height, Fn&& fn, int row0 = 0, int row1 = 1 << 30) {
   int x0, x1, y0, y1;
   if (!texels_touching(std::min({t.px[0], t.px[1], t.px[2]}), std::max({t.px[0], t.px[1], t.px[2]}), width, x0, x1)) return;
   if (!texels_touching(std::min({t.py[0], t.py[1], t.py[2]}), std::max({t.py[0], t.py[1], t.py[2]}), height, y0, y1)) return;
+  y0 = std::max(y0, row0);
+  y1 = std::min(y1, row1 - 1);
   for (int y = y0; y <= y1; ++y)
     for (int x = x0; x <= x1; ++x)
       if (triangle_overlaps_texel(t, x, y)) fn(x, y);

@@ -55,8 +55,4 @@ struct UvCheckReport {
 // and a compacted mesh (no deleted elements), as read_mesh() and reduce_mesh() return.
 UvCheckReport check_uv_mapping(const Mesh& mesh, const UvCheckOptions& options);
 
-// Charts: faces connected through edges whose two sides carry the same UVs. Returns a chart
-// index per face, numbered by first face in face order; `count` receives the number.
-std::vector<int> uv_charts(const Mesh& mesh, size_t* count = nullptr);
-
 }  // namespace meso
