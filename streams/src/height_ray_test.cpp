@@ -28,7 +28,7 @@ HeightField bumps(int w, int h, Border border) {
 }
 
 // The surface at height z along the ray, minus the ray: >= 0 means at or below the surface.
-double below(const HeightField& f, const HeightRay& r, double t) { return f.bilinear(r.x + t * r.dx, r.y + t * r.dy) - (r.z + t * r.dz); }
+double below(const HeightField& f, const HeightRay& r, double t) { return f.bilinear(r.x + t * r.dx, r.y + t * r.dy) - r.z_at(t); }
 
 // A random ray from height 1 at elevation 0.02..1.52 rad over the map's interior.
 HeightRay random_ray(const HeightField& f, std::mt19937& rng) {
@@ -47,13 +47,17 @@ HeightRay random_ray(const HeightField& f, std::mt19937& rng) {
 
 
 // A dense march (1/64 texel steps horizontally, bisection of the first sign change).
+// Bent rays: until they pass below 0, or rise back above 1 past their lowest point.
 bool reference_hit(const HeightField& f, const HeightRay& r, double& t_hit) {
   const double horizontal = std::hypot(r.dx, r.dy);
-  const double t_end = r.z / -r.dz;
+  // Straight: where z reaches 0. Bent: march far enough (the loop stops on leaving).
+  const double t_end = r.ddz == 0 ? r.z / -r.dz : 4.0 * (f.height.width + f.height.height) / std::max(horizontal, 1e-9);
   const double dt = std::min(t_end / 64, horizontal > 0 ? (1.0 / 64) / horizontal : t_end);
   const int w = f.height.width, h = f.height.height;
+  const double vertex = r.ddz > 0 ? -r.dz / (2 * r.ddz) : 1e300;
   for (double t = 0; t < t_end + dt; t += dt) {
     const double tc = std::min(t, t_end);
+    if (r.z_at(tc) < 0 || (tc > vertex && r.z_at(tc) > 1)) return false;
     const double x = r.x + tc * r.dx, y = r.y + tc * r.dy;
     if (f.border == Border::clamp && (x < 0 || y < 0 || x > w || y > h)) return false;
     if (below(f, r, tc) >= 0) {
@@ -120,6 +124,40 @@ TEST(PyramidTrace, FindsTheFirstIntersection) {
       EXPECT_NEAR(below(f, r, got.t), 0.0, 1e-6) << "ray " << k;
     }
     EXPECT_GT(hits, 150);
+  }
+}
+
+// Wrapped maps (rays crossing into neighbouring tiles) and bent rays of both signs: the
+// pyramid tracer still finds the dense march's first hit, and bent-up rays that leave the
+// height field miss in both.
+TEST(PyramidTrace, WrapsAndBendsExactly) {
+  for (const HeightField& f : {bumps(16, 16, Border::wrap), noise(12, 9, Border::wrap, 8), noise(20, 20, Border::clamp, 9)}) {
+    const MinMaxPyramid p = build_min_max_pyramid(f);
+    std::mt19937 rng(29);
+    std::uniform_real_distribution<double> u(-1, 1);
+    int hits = 0, misses = 0;
+    for (int k = 0; k < 400; ++k) {
+      HeightRay r = random_ray(f, rng);
+      r.ddz = 0.02 * u(rng) / (1 + std::abs(r.dz));  // bends either way, some enough to leave
+      double t_ref = 0;
+      const bool ref = reference_hit(f, r, t_ref);
+      const HeightHit got = trace_min_max_pyramid(f, p, r);
+      if (!ref) {
+        // The march may step over a grazing touch the exact tracer finds; it must not find
+        // a crossing the march saw nothing of by more than that.
+        if (got.hit) {
+          EXPECT_NEAR(below(f, r, got.t), 0.0, 1e-6);
+        }
+        ++misses;
+        continue;
+      }
+      ++hits;
+      ASSERT_TRUE(got.hit) << "ray " << k << " missed";
+      EXPECT_LE(got.t, t_ref + 1e-6) << "ray " << k << " skipped the first intersection";
+      EXPECT_NEAR(below(f, r, got.t), 0.0, 1e-6) << "ray " << k;
+    }
+    EXPECT_GT(hits, 100);
+    EXPECT_GT(misses, 0) << "some bent rays should leave the height field";
   }
 }
 

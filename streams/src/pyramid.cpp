@@ -71,10 +71,31 @@ MinMaxPyramid build_min_max_pyramid(const HeightField& f) {
 
 namespace {
 
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// The smallest root of a t^2 + b t + c = 0 in (lo, hi], or +inf.
+double first_root(double a, double b, double c, double lo, double hi) {
+  double best = kInf;
+  if (a == 0) {
+    if (b != 0) {
+      const double t = -c / b;
+      if (t > lo && t <= hi) best = t;
+    }
+    return best;
+  }
+  const double disc = b * b - 4 * a * c;
+  if (disc < 0) return best;
+  const double q = -0.5 * (b + std::copysign(std::sqrt(disc), b));
+  for (double t : {q / a, q != 0 ? c / q : kInf})
+    if (t > lo && t <= hi) best = std::min(best, t);
+  return best;
+}
+
 struct PyramidTracer {
   const HeightField& field;
   const MinMaxPyramid& pyramid;
   const HeightRay& r;
+  double ox = 0, oy = 0;  // the tile being traversed, in pixels (Border::wrap)
   int steps = 0;
 
   // The ray's parameter interval over [x0, x1] x [y0, y1] (pixels), intersected with [t0, t1].
@@ -90,19 +111,33 @@ struct PyramidTracer {
     return slab(r.x, r.dx, x0, x1) && slab(r.y, r.dy, y0, y1);
   }
 
+  // The lowest height of the ray over [t0, t1].
+  double lowest(double t0, double t1) const {
+    double z = std::min(r.z_at(t0), r.z_at(t1));
+    if (r.ddz > 0) {
+      const double vertex = -r.dz / (2 * r.ddz);
+      if (vertex > t0 && vertex < t1) z = std::min(z, r.z_at(vertex));
+    }
+    return z;
+  }
+
   // First hit inside texel (x, y) of level l for t in [t0, t1], or false.
   bool visit(int l, int x, int y, double t0, double t1, double& t_hit) {
     const Image& level = pyramid.levels[static_cast<size_t>(l)];
     const double sx = static_cast<double>(pyramid.levels[0].width) / level.width;
     const double sy = static_cast<double>(pyramid.levels[0].height) / level.height;
     const double x0 = x * sx, x1 = (x + 1) * sx, y0 = y * sy, y1 = (y + 1) * sy;
-    if (!clip(x0, x1, y0, y1, t0, t1)) return false;
+    if (!clip(ox + x0, ox + x1, oy + y0, oy + y1, t0, t1)) return false;
     ++steps;
-    // Below the box's top from t_top on (the ray descends).
     const double top = level.at(x, y, 1);
-    t0 = std::max(t0, (r.z - top) / -r.dz);
+    if (lowest(t0, t1) > top) return false;  // the ray passes over the box
+    // A straight ray is below the box's top from one point on (it descends).
+    if (r.ddz == 0) t0 = std::max(t0, (r.z - top) / -r.dz);
     if (t0 > t1) return false;
-    if (l == 0) return intersect_footprint(field, x, y, r, t0, t1, t_hit);
+    if (l == 0) {
+      const int tx = static_cast<int>(std::lround(ox)) + x, ty = static_cast<int>(std::lround(oy)) + y;
+      return intersect_footprint(field, tx, ty, r, t0, t1, t_hit);
+    }
     // Finer texels overlapping this footprint, in the order the ray meets them.
     const Image& fine = pyramid.levels[static_cast<size_t>(l - 1)];
     const int fx0 = static_cast<int>(std::floor(x0 * fine.width / pyramid.levels[0].width));
@@ -116,7 +151,8 @@ struct PyramidTracer {
     for (int cy = fy0; cy <= fy1; ++cy)
       for (int cx = fx0; cx <= fx1; ++cx) {
         double a = t0, b = t1;
-        if (clip(cx * fsx, (cx + 1) * fsx, cy * fsy, (cy + 1) * fsy, a, b) && n < 16) kids[static_cast<size_t>(n++)] = {a, {cx, cy}};
+        if (clip(ox + cx * fsx, ox + (cx + 1) * fsx, oy + cy * fsy, oy + (cy + 1) * fsy, a, b) && n < 16)
+          kids[static_cast<size_t>(n++)] = {a, {cx, cy}};
       }
     std::sort(kids.begin(), kids.begin() + n, [](const auto& p, const auto& q) { return p.first < q.first; });
     for (int k = 0; k < n; ++k)
@@ -130,17 +166,36 @@ struct PyramidTracer {
 HeightHit trace_min_max_pyramid(const HeightField& field, const MinMaxPyramid& pyramid, const HeightRay& r) {
   HeightHit out;
   if (!(r.dz < 0) || pyramid.levels.empty()) return out;
+  // Where the ray is inside the height range: from height 1 (or its start) down to where it
+  // passes below 0, or, bent upward, rises back above 1.
+  const double t0 = r.z > 1 ? first_root(r.ddz, r.dz, r.z - 1, -1e-300, kInf) : 0.0;
+  if (!std::isfinite(t0)) return out;
+  const double below = first_root(r.ddz, r.dz, r.z, t0, kInf);
+  const double above = r.ddz > 0 ? first_root(r.ddz, r.dz, r.z - 1, t0 + 1e-12 * (1 + t0), kInf) : kInf;
+  const double t1 = std::min(below, above);
+  if (!std::isfinite(t1)) return out;
   PyramidTracer tracer{field, pyramid, r};
-  const double t0 = r.z > 1 ? (r.z - 1) / -r.dz : 0.0, t1 = r.z / -r.dz;  // from height 1 down to 0
   const int top = static_cast<int>(pyramid.levels.size()) - 1;
-  const Image& root = pyramid.levels.back();
-  double t_hit = 0;
-  for (int y = 0; y < root.height && !out.hit; ++y)
-    for (int x = 0; x < root.width && !out.hit; ++x)
-      if (tracer.visit(top, x, y, t0, t1, t_hit)) {
-        out.hit = true;
-        out.t = t_hit;
-      }
+  const double w = pyramid.levels[0].width, h = pyramid.levels[0].height;
+  // The tiles the ray's path crosses, in order (one tile under Border::clamp).
+  double t = t0;
+  while (t < t1) {
+    const double x = r.x + (t + 1e-12 * (1 + t)) * r.dx, y = r.y + (t + 1e-12 * (1 + t)) * r.dy;
+    const double a = std::floor(x / w), b = std::floor(y / h);
+    if (field.border == Border::clamp && (a != 0 || b != 0)) break;
+    double ta = t, tb = t1;
+    tracer.clip(a * w, (a + 1) * w, b * h, (b + 1) * h, ta, tb);
+    tracer.ox = a * w;
+    tracer.oy = b * h;
+    double t_hit = 0;
+    if (tracer.visit(top, 0, 0, t, tb, t_hit)) {
+      out.hit = true;
+      out.t = t_hit;
+      break;
+    }
+    if (!(tb > t)) break;  // no progress (a degenerate path): stop
+    t = tb;
+  }
   out.steps = tracer.steps;
   return out;
 }

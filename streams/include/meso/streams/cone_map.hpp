@@ -42,6 +42,7 @@
 #pragma once
 
 #include "meso/streams/height_field.hpp"
+#include "meso/streams/height_ray.hpp"
 
 #include <vector>
 
@@ -71,27 +72,11 @@ Image build_cone_map(const HeightField& field, const ConeMapOptions& options);
 // overlaps, which keeps its cone safe for the union footprint (never averaged).
 std::vector<Image> cone_map_levels(Image level0);
 
-// A ray over the height field: origin (x, y) in pixel units, z normalised height; direction
-// in the same units, dz < 0 (descending).
-struct HeightRay {
-  double x = 0, y = 0, z = 1, dx = 0, dy = 0, dz = -1;
-};
-
-struct HeightHit {
-  bool hit = false;
-  double t = 0;   // the first intersection is origin + t * direction
-  int steps = 0;  // cone steps and footprint tests taken
-};
-
 // Reference CPU tracer of a cone map (level 0), the algorithm the previewer's shaders run:
 // at (x, z) over texel p, step to the boundary of the cone of apex (x, T_p); when that step
 // would not leave F_p, intersect the ray exactly with S over F_p (four bilinear pieces, a
 // quadratic each) and move on to the next texel. Relaxed maps bisect a step whose end is
 // below the surface. Rays leaving [0, W] x [0, H] under Border::clamp miss.
 HeightHit trace_cone_map(const HeightField& field, const Image& cone, ConeKind kind, const HeightRay& ray, int max_steps = 4096);
-
-// The first intersection of the ray with S over texel (i, j)'s footprint for t in [t0, t1]
-// (the ray's horizontal path must stay within the footprint there), exact up to rounding.
-bool intersect_footprint(const HeightField& field, int i, int j, const HeightRay& ray, double t0, double t1, double& t_hit);
 
 }  // namespace meso

@@ -4,6 +4,7 @@
 #pragma once
 
 #include "meso/streams/height_field.hpp"
+#include "meso/streams/height_ray.hpp"
 
 #include <vector>
 
@@ -28,16 +29,15 @@ MinMaxPyramid build_min_max_pyramid(const HeightField& field);
 // surface over the texel's footprint.
 Image footprint_min_max(const HeightField& field);
 
-struct HeightRay;
-struct HeightHit;
-
 // Reference CPU tracer of the max pyramid (pyramidal displacement mapping, survey 4.3.3):
 // descends the quadtree front to back along the ray, skipping every texel whose box
 // [footprint] x [0, max] the ray misses, and intersects S exactly inside level-0 footprints
-// (intersect_footprint, cone_map.hpp). Finds the first intersection (up to rounding); the
-// same units as trace_cone_map (pixels of level 0, normalised height). Rays leaving
-// [0, W] x [0, H] miss (the tracer does not follow Border::wrap into neighbouring tiles).
-// `steps` counts the texels visited.
+// (intersect_footprint). Finds the first intersection (up to rounding); units as in
+// height_ray.hpp. Bent rays (ddz != 0) are exact too: a node is skipped when the lowest
+// point of the ray over it is above its maximum. Under Border::clamp a ray leaving
+// [0, W] x [0, H] misses; under Border::wrap it goes on through the neighbouring tiles.
+// The ray is followed until it passes below height 0 or, bent upward, back above height 1
+// (then it has left the height field: no hit). `steps` counts the texels visited.
 HeightHit trace_min_max_pyramid(const HeightField& field, const MinMaxPyramid& pyramid, const HeightRay& ray);
 
 }  // namespace meso
