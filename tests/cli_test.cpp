@@ -272,6 +272,25 @@ TEST_F(Skeleton, WholePipeline) {
   EXPECT_EQ(cones[1].at(3, 5, 1), std::min({cones[0].at(6, 10, 1), cones[0].at(7, 10, 1), cones[0].at(6, 11, 1), cones[0].at(7, 11, 1)}));
   EXPECT_EQ(std::get<std::string>(relaxed_cones[0].metadata.at("cone_kind")), "relaxed");
 
+  // The view-dependent displacement of the baked map on the reduced base: curvature range
+  // and relief from the mesh; two parts whose shapes the report states.
+  const Result vdm = run("streams vdm " + (d / "maps" / "displacement.exr").string() + " -o " + (d / "vdm.exr").string() +
+                         " --theta 3 --phi 4 --mesh " + (d / "reduced.obj").string() + " --curvature-steps 2 --max-rank 6 --json");
+  ASSERT_EQ(vdm.code, 0) << vdm.err;
+  const auto vdm_report = nlohmann::json::parse(vdm.out);
+  const auto vdm_parts = read_image_parts(d / "vdm.exr");
+  ASSERT_EQ(vdm_parts.size(), 2u);
+  EXPECT_EQ(vdm_parts[0].width, 128);
+  EXPECT_EQ(vdm_parts[0].channels, std::max(1, vdm_report["rank"].get<int>()));
+  EXPECT_EQ(vdm_parts[1].height, vdm_report["directions"].get<int>());
+  EXPECT_EQ(vdm_report["directions"], 3 * 4 * vdm_report["curvatures"].size());
+  EXPECT_LT(vdm_report["bytes"].get<double>(), vdm_report["raw_bytes"].get<double>());
+  EXPECT_EQ(run("streams vdm " + (d / "maps" / "displacement.exr").string() + " -o " + (d / "v.exr").string() + " --curvatures 0,x").code, 2);
+  EXPECT_EQ(run("streams vdm " + (d / "maps" / "displacement.exr").string() + " -o " + (d / "v.exr").string() + " --curvatures 0 --mesh " +
+                (d / "reduced.obj").string())
+                .code,
+            2);
+
   const Result sdf = run("streams sdf " + (d / "maps" / "displacement.exr").string() + " -o " + (d / "sdf.exr").string() +
                          " --depth 8 --relief 0.05");
   ASSERT_EQ(sdf.code, 0) << sdf.err;

@@ -6,6 +6,12 @@
 #include "meso/streams/cone_map.hpp"
 #include "meso/streams/distance_field.hpp"
 #include "meso/streams/pyramid.hpp"
+#include "meso/streams/vdm.hpp"
+#include "meso/bake/curvature.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <sstream>
 
 namespace meso::cli {
 
@@ -122,6 +128,136 @@ void add_streams(CLI::App& app, Context& ctx) {
       };
     });
   }
+
+  // View-dependent displacement: the table, compressed, in a two-part EXR.
+  struct VdmArgs {
+    std::string curvatures, mesh;
+    int curvature_steps = 4, max_rank = 32;
+    double max_error = 0.002;
+    VdmOptions options;
+    bool relief_given = false;
+  };
+  auto vdm_args = std::make_shared<StreamArgs>();
+  auto vdm = std::make_shared<VdmArgs>();
+  CLI::App* vdm_cmd = add_stream_subcommand(streams, "vdm", "View-dependent displacement map (Wang et al.): per texel, view direction and curvature, where the view ray meets the surface; PCA-compressed",
+                                            "Output EXR, two parts: per-texel PCA weights, and the mean and basis per direction", *vdm_args);
+  vdm_cmd->add_option("--theta", vdm->options.theta, "View angles from the normal (sampled at the centres of [0, --theta-max])")->check(CLI::Range(1, 256))->capture_default_str();
+  vdm_cmd->add_option("--theta-max", vdm->options.theta_max, "Largest view angle from the normal, degrees")->check(CLI::Range(1.0, 90.0))->capture_default_str();
+  vdm_cmd->add_option("--phi", vdm->options.phi, "Azimuths around the normal")->check(CLI::Range(1, 1024))->capture_default_str();
+  auto* curv = vdm_cmd->add_option("--curvatures", vdm->curvatures, "Comma-separated curvatures along the view direction, per unit of u (default: 0, a flat base)");
+  vdm_cmd->add_option("--mesh", vdm->mesh, "Base mesh: curvature range (quadric fits) and relief from its size, instead of --curvatures/--relief")->excludes(curv);
+  vdm_cmd->add_option("--curvature-steps", vdm->curvature_steps, "With --mesh: curvature samples over the mesh's range")->check(CLI::Range(1, 64))->capture_default_str();
+  vdm_cmd->add_option("--relief", vdm->options.relief, "Height range in units of u (default 0.1, or from --mesh)")->check(CLI::PositiveNumber & Finite);
+  vdm_cmd->add_option("--max-error", vdm->max_error, "Largest RMS error of the compressed table, units of u")->check(CLI::NonNegativeNumber & Finite)->capture_default_str();
+  vdm_cmd->add_option("--max-rank", vdm->max_rank, "Largest number of PCA components")->check(CLI::Range(0, 4096))->capture_default_str();
+  vdm_cmd->callback([&ctx, vdm_args, vdm, vdm_cmd] {
+    vdm->relief_given = vdm_cmd->count("--relief") > 0;
+    ctx.run = [&ctx, vdm_args, vdm](nlohmann::json& report, Progress& progress) {
+      const auto start = std::chrono::steady_clock::now();
+      const HeightField field = load_height_field(*vdm_args);
+      VdmOptions o = vdm->options;
+      if (!vdm->curvatures.empty()) {
+        o.curvatures.clear();
+        std::stringstream list(vdm->curvatures);
+        std::string item;
+        while (std::getline(list, item, ',')) {
+          size_t used = 0;
+          float v = 0;
+          try {
+            v = std::stof(item, &used);
+          } catch (const std::exception&) {
+            used = 0;
+          }
+          if (item.empty() || used != item.size() || !std::isfinite(v)) throw UsageError("--curvatures: '" + item + "' is not a number");
+          o.curvatures.push_back(v);
+        }
+      }
+      nlohmann::json mesh_report;
+      if (!vdm->mesh.empty()) {
+        // Object length per unit of UV: sqrt(3D area / UV area) over the faces.
+        Mesh base = load_mesh(ctx.globals, vdm->mesh, mesh_report);
+        if (!has_uvs(base)) throw InputError(vdm->mesh, "has no texture coordinates; the VDM needs the base mesh's UV scale");
+        double area3 = 0, area_uv = 0;
+        for (auto f : base.faces()) {
+          const auto hs = face_halfedges(base, f);
+          const Vec3f a = base.point(base.to_vertex_handle(hs[0])), b = base.point(base.to_vertex_handle(hs[1])),
+                      c = base.point(base.to_vertex_handle(hs[2]));
+          area3 += 0.5 * static_cast<double>(((b - a) % (c - a)).norm());
+          area_uv += 0.5 * std::abs(static_cast<double>(uv_double_area(base, f)));
+        }
+        if (!(area3 > 0 && area_uv > 0)) throw InputError(vdm->mesh, "has no area in 3D or in UV");
+        const double per_u = std::sqrt(area3 / area_uv);
+        const std::vector<VertexCurvature> k = fit_curvature(base);
+        double lo = 0, hi = 0;
+        for (const VertexCurvature& v : k) {
+          lo = std::min(lo, static_cast<double>(v.k2));
+          hi = std::max(hi, static_cast<double>(v.k1));
+        }
+        o.curvatures.clear();
+        const int steps = hi - lo > 1e-9 ? vdm->curvature_steps : 1;
+        for (int i = 0; i < steps; ++i)
+          o.curvatures.push_back(static_cast<float>((steps == 1 ? 0.5 * (lo + hi) : lo + (hi - lo) * i / (steps - 1)) * per_u));
+        if (!vdm->relief_given) o.relief = static_cast<float>(std::max(1e-6, field.scale / per_u));
+        mesh_report["object_length_per_u"] = per_u;
+        mesh_report["curvature_range"] = {lo, hi};
+      }
+      const VdmTable table = build_vdm(field, o, progress);
+      const CompressedVdm c = compress_vdm(table, vdm->max_error, vdm->max_rank);
+      // Part 0: weights, W x H, one channel per component (one zero channel at rank 0).
+      const int channels = std::max(1, c.rank);
+      Image weights(table.width, table.height, channels, 0.0f);
+      for (size_t i = 0; i < weights.texel_count(); ++i)
+        for (int k = 0; k < c.rank; ++k) weights.pixels[i * static_cast<size_t>(channels) + static_cast<size_t>(k)] = c.weights[i * static_cast<size_t>(c.rank) + static_cast<size_t>(k)];
+      // Part 1: (rank + 1) x directions, column 0 the mean, column k + 1 component k.
+      Image basis(c.rank + 1, c.directions, 1, 0.0f);
+      for (int j = 0; j < c.directions; ++j) {
+        basis.at(0, j) = c.mean[static_cast<size_t>(j)];
+        for (int k = 0; k < c.rank; ++k) basis.at(k + 1, j) = c.basis[static_cast<size_t>(j) * static_cast<size_t>(c.rank) + static_cast<size_t>(k)];
+      }
+      std::string curvature_list;
+      for (float v : o.curvatures) curvature_list += (curvature_list.empty() ? "" : ",") + std::to_string(v);
+      weights.metadata = height_field_metadata(field);
+      weights.metadata["quantity"] = std::string("view-dependent displacement (PCA)");
+      weights.metadata["theta"] = table.theta;
+      weights.metadata["theta_max"] = o.theta_max;
+      weights.metadata["phi"] = table.phi;
+      weights.metadata["curvatures"] = curvature_list;
+      weights.metadata["relief"] = o.relief;
+      weights.metadata["rank"] = c.rank;
+      weights.metadata["rms_error"] = static_cast<float>(c.rms_error);
+      weights.metadata["max_error"] = static_cast<float>(c.max_error);
+      weights.metadata["miss"] = kVdmMiss;
+      weights.metadata["layout"] = std::string(
+          "d(texel, dir) = basis[0][dir] + sum_k weights[texel][k] basis[k+1][dir], units of u; dir = (curvature * theta + i) * phi + j; "
+          "theta_i = (i + 0.5) / theta * theta_max, phi_j = 360 j / phi degrees from +u toward +v; d < -0.5: no hit");
+      basis.metadata["quantity"] = std::string("view-dependent displacement basis: column 0 mean, column k + 1 component k, row = direction");
+      OutputSet outputs;
+      write_image_parts({weights, basis}, outputs.add(vdm_args->output), vdm_args->half ? PixelFormat::half : PixelFormat::float32);
+      outputs.commit();
+      const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      const size_t raw = table.distance.size() * sizeof(float);
+      info(ctx.globals, "wrote " + vdm_args->output + " (rank " + std::to_string(c.rank) + ", RMS error " + std::to_string(c.rms_error) + ")");
+      report = {{"command", "streams vdm"},
+                {"input", vdm_args->input},
+                {"output", vdm_args->output},
+                {"width", table.width},
+                {"height", table.height},
+                {"theta", table.theta},
+                {"phi", table.phi},
+                {"curvatures", o.curvatures},
+                {"relief", o.relief},
+                {"directions", table.directions()},
+                {"rank", c.rank},
+                {"rms_error", c.rms_error},
+                {"max_error", c.max_error},
+                {"raw_bytes", raw},
+                {"bytes", c.bytes() / sizeof(float) * (vdm_args->half ? 2 : 4)},
+                {"compression_ratio", static_cast<double>(raw) / static_cast<double>(std::max<size_t>(1, c.bytes()))},
+                {"seconds", seconds}};
+      if (!vdm->mesh.empty()) report["mesh"] = mesh_report;
+      return 0;
+    };
+  });
 
   auto sdf_args = std::make_shared<StreamArgs>();
   auto sdf_options = std::make_shared<DistanceFieldOptions>();

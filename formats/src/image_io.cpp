@@ -48,12 +48,12 @@ std::unique_ptr<OIIO::ImageInput> open_input(const fs::path& path) {
 }
 
 // Reads the MIP level the input is positioned at (its current spec).
-Image read_level(OIIO::ImageInput& in, const std::string& name, int level) {
+Image read_level(OIIO::ImageInput& in, const std::string& name, int level, int subimage = 0) {
   const OIIO::ImageSpec& spec = in.spec();
   if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0 || spec.depth > 1)
     throw InputError(name, "unsupported image layout");
   Image img(spec.width, spec.height, spec.nchannels);
-  if (!in.read_image(0, level, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, img.pixels.data())) {
+  if (!in.read_image(subimage, level, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, img.pixels.data())) {
     const std::string err = in.geterror();
     throw InputError(name, "cannot read image data: " + err.substr(0, err.find('\n')));
   }
@@ -105,6 +105,16 @@ void check_writable(const Image& image, const std::string& name) {
 
 OIIO::ImageSpec spec_of(const Image& image, PixelFormat format, const ImageMetadata& metadata, bool text_only = false) {
   OIIO::ImageSpec spec(image.width, image.height, image.channels, type_of(format));
+  // Beyond RGBA, name channels so that their sorted order (EXR stores channels sorted by
+  // name) is their index order: c000, c001, ...
+  if (image.channels > 4) {
+    spec.channelnames.clear();
+    char name[16];
+    for (int c = 0; c < image.channels; ++c) {
+      std::snprintf(name, sizeof name, "c%03d", c);
+      spec.channelnames.emplace_back(name);
+    }
+  }
   spec.attribute("oiio:UnassociatedAlpha", 1);
   if (format == PixelFormat::float32 || format == PixelFormat::half) spec.attribute("compression", "zip");
   // No timestamps in headers: outputs must be byte-identical across runs. OIIO's EXR writer
@@ -183,6 +193,41 @@ std::vector<Image> read_image_levels(const fs::path& path) {
   std::vector<Image> levels{read_level(*in, path.string(), 0)};
   for (int k = 1; in->seek_subimage(0, k); ++k) levels.push_back(read_level(*in, path.string(), k));
   return levels;
+}
+
+void write_image_parts(const std::vector<Image>& parts, const fs::path& path, PixelFormat format) {
+  const std::string name = path.string();
+  for (const Image& part : parts) check_writable(part, name);
+  if (format != PixelFormat::float32 && format != PixelFormat::half) throw InternalError(name + ": parts are written as EXR only");
+  auto out = OIIO::ImageOutput::create(name);
+  if (!out || !out->supports("multiimage")) throw InternalError(name + ": this format cannot hold several parts (use .exr)");
+  std::vector<OIIO::ImageSpec> specs;
+  // OpenEXR requires every part to share the display window: the largest part's extent.
+  int full_w = 0, full_h = 0;
+  for (const Image& part : parts) {
+    full_w = std::max(full_w, part.width);
+    full_h = std::max(full_h, part.height);
+  }
+  for (const Image& part : parts) {
+    specs.push_back(spec_of(part, format, part.metadata));
+    specs.back().full_x = specs.back().full_y = 0;
+    specs.back().full_width = full_w;
+    specs.back().full_height = full_h;
+  }
+  if (!out->open(name, static_cast<int>(specs.size()), specs.data())) throw InternalError(name + ": cannot open for writing: " + out->geterror());
+  for (size_t k = 0; k < parts.size(); ++k) {
+    if (k > 0 && !out->open(name, specs[k], OIIO::ImageOutput::AppendSubimage))
+      throw InternalError(name + ": cannot add part " + std::to_string(k) + ": " + out->geterror());
+    if (!write_pixels(*out, parts[k], format)) throw InternalError(name + ": cannot write part " + std::to_string(k) + ": " + out->geterror());
+  }
+  if (!out->close()) throw InternalError(name + ": cannot write image: " + out->geterror());
+}
+
+std::vector<Image> read_image_parts(const fs::path& path) {
+  auto in = open_input(path);
+  std::vector<Image> parts{read_level(*in, path.string(), 0, 0)};
+  for (int k = 1; in->seek_subimage(k, 0); ++k) parts.push_back(read_level(*in, path.string(), 0, k));
+  return parts;
 }
 
 }  // namespace meso

@@ -35,6 +35,24 @@ TEST(ImageIo, ExrFloatRoundTripIsExactWithMetadata) {
   EXPECT_EQ(std::get<int>(back.metadata.at("levels")), 3);
 }
 
+TEST(ImageIo, MultiPartExrKeepsEachPart) {
+  test::TempDir dir;
+  Image a(5, 3, 12), b(9, 1, 2);
+  for (size_t i = 0; i < a.pixels.size(); ++i) a.pixels[i] = 0.25f * static_cast<float>(i);
+  for (size_t i = 0; i < b.pixels.size(); ++i) b.pixels[i] = -1.5f * static_cast<float>(i);
+  a.metadata["rank"] = 7;
+  b.metadata["what"] = std::string("basis");
+  write_image_parts({a, b}, dir / "p.exr", PixelFormat::float32);
+  const std::vector<Image> parts = read_image_parts(dir / "p.exr");
+  ASSERT_EQ(parts.size(), 2u);
+  EXPECT_EQ(parts[0].width, 5);
+  EXPECT_EQ(parts[0].channels, 12);
+  EXPECT_EQ(parts[0].pixels, a.pixels) << "channels beyond RGBA keep their order";
+  EXPECT_EQ(std::get<int>(parts[0].metadata.at("rank")), 7);
+  EXPECT_EQ(parts[1].pixels, b.pixels);
+  EXPECT_EQ(std::get<std::string>(parts[1].metadata.at("what")), "basis");
+}
+
 TEST(ImageIo, Png16RoundTripWithinHalfAStep) {
   test::TempDir dir;
   const Image img = ramp(16, 9, 3);

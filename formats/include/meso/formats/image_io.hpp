@@ -29,4 +29,11 @@ void write_image_levels(const std::vector<Image>& levels, const std::filesystem:
 // Reads every MIP level of an image file (one level for files without MIP maps).
 std::vector<Image> read_image_levels(const std::filesystem::path& path);
 
+// Writes several images as the parts of one multi-part EXR (OpenEXR multi-part, OIIO
+// subimages), in order, each with its own size, channels and metadata.
+void write_image_parts(const std::vector<Image>& parts, const std::filesystem::path& path, PixelFormat format);
+
+// Reads every part of a multi-part image file (one part for ordinary files).
+std::vector<Image> read_image_parts(const std::filesystem::path& path);
+
 }  // namespace meso
