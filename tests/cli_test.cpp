@@ -291,6 +291,17 @@ TEST_F(Skeleton, WholePipeline) {
                 .code,
             2);
 
+  // Compressed displacement vertex streams: the file's size is the documented layout.
+  const Result dstream = run("streams dstream --low " + (d / "reduced.obj").string() + " --high " + (d / "high.obj").string() + " -o " +
+                             (d / "dstream.bin").string() + " --levels 3 --json");
+  ASSERT_EQ(dstream.code, 0) << dstream.err;
+  const auto ds_report = nlohmann::json::parse(dstream.out);
+  const size_t ds_vertices = ds_report["vertices"].get<size_t>();
+  EXPECT_EQ(fs::file_size(d / "dstream.bin"), 8 + 16 + 8 + 3 * 8 + 8 * ds_vertices);
+  EXPECT_EQ(ds_vertices, reduced.n_faces() * (3 + 6 + 15));
+  EXPECT_LE(ds_report["max_position_error"].get<double>(),
+            (ds_report["displacement_max"].get<double>() - ds_report["displacement_min"].get<double>()) / 32766 * 1.001);
+
   const Result sdf = run("streams sdf " + (d / "maps" / "displacement.exr").string() + " -o " + (d / "sdf.exr").string() +
                          " --depth 8 --relief 0.05");
   ASSERT_EQ(sdf.code, 0) << sdf.err;

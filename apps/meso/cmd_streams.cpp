@@ -8,8 +8,10 @@
 #include "meso/streams/pyramid.hpp"
 #include "meso/streams/vdm.hpp"
 #include "meso/bake/curvature.hpp"
+#include "meso/bake/displacement_stream.hpp"
 
 #include <chrono>
+#include <filesystem>
 #include <cmath>
 #include <sstream>
 
@@ -255,6 +257,63 @@ void add_streams(CLI::App& app, Context& ctx) {
                 {"compression_ratio", static_cast<double>(raw) / static_cast<double>(std::max<size_t>(1, c.bytes()))},
                 {"seconds", seconds}};
       if (!vdm->mesh.empty()) report["mesh"] = mesh_report;
+      return 0;
+    };
+  });
+
+  // Compressed-displacement vertex streams: sampled against the high mesh, no map needed.
+  struct DstreamArgs {
+    std::string low, high, output;
+    float front = 0, back = 0;
+    DisplacementStreamOptions options;
+  };
+  auto ds = std::make_shared<DstreamArgs>();
+  CLI::App* dstream = streams->add_subcommand(
+      "dstream", "Pre-sampled displacement per base triangle at levels 2^l, with morph targets, as 8-byte compressed vertices");
+  dstream->add_option("--low", ds->low, "Base mesh (vertex normals are used or computed)")->required();
+  dstream->add_option("--high", ds->high, "High-poly mesh")->required();
+  dstream->add_option("-o,--output", ds->output, "Output file (dstream.bin, docs/formats.md)")->required();
+  dstream->add_option("--levels", ds->options.levels, "Levels 0..L-1, level l with 2^l segments per edge")->check(CLI::Range(1, 7))->capture_default_str();
+  dstream->add_option("--front", ds->front, "Ray reach outward, object units (0: 5% of the high mesh's diagonal)")->check(CLI::NonNegativeNumber & Finite);
+  dstream->add_option("--back", ds->back, "Ray reach inward, object units (0: as --front)")->check(CLI::NonNegativeNumber & Finite);
+  dstream->callback([&ctx, ds] {
+    ctx.run = [&ctx, ds](nlohmann::json& report, Progress& progress) {
+      nlohmann::json low_report, high_report;
+      const Mesh low = load_mesh(ctx.globals, ds->low, low_report);
+      const Mesh high = load_mesh(ctx.globals, ds->high, high_report);
+      DisplacementStreamOptions o = ds->options;
+      o.front = ds->front;
+      o.back = ds->back;
+      const DisplacementStream stream = sample_displacement_stream(low, high, o, progress);
+      const EncodedStream encoded = encode_displacement_stream(stream);
+      OutputSet outputs;
+      write_displacement_stream(encoded, static_cast<int>(low.n_vertices()), static_cast<int>(low.n_faces()), outputs.add(ds->output).string());
+      outputs.commit();
+      size_t vertices = 0;
+      nlohmann::json levels = nlohmann::json::array();
+      for (size_t l = 0; l < encoded.vertices.size(); ++l) {
+        vertices += encoded.vertices[l].size();
+        levels.push_back({{"segments", encoded.segments[l]}, {"vertices", encoded.vertices[l].size()}});
+      }
+      if (stream.misses) warn(ctx.globals, std::to_string(stream.misses) + " samples found no high surface within reach (stored as 0)");
+      info(ctx.globals, "wrote " + ds->output + " (" + std::to_string(vertices) + " vertices, 8 bytes each)");
+      report = {{"command", "streams dstream"},
+                {"low", low_report},
+                {"high", high_report},
+                {"output", ds->output},
+                {"levels", levels},
+                {"vertices", vertices},
+                {"bytes_per_vertex", 8},
+                {"bytes", std::filesystem::file_size(ds->output)},
+                {"raw_vertex_buffer_bytes", vertices * 12},
+                {"ratio_to_raw", static_cast<double>(vertices * 12) / static_cast<double>(std::max<size_t>(1, vertices * 8))},
+                {"displacement_min", encoded.min_value},
+                {"displacement_max", encoded.max_value},
+                {"max_position_error", encoded.max_error},
+                {"rays", stream.rays},
+                {"misses", stream.misses},
+                {"front", stream.front},
+                {"back", stream.back}};
       return 0;
     };
   });

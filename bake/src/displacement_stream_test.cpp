@@ -1,0 +1,121 @@
+#include "meso/bake/displacement_stream.hpp"
+
+#include "test_support.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <map>
+
+namespace meso {
+namespace {
+
+// A high plane z = a x + b y + c over a wide area (two triangles).
+Mesh plane(float a, float b, float c) {
+  Mesh m;
+  auto at = [&](float x, float y) { return m.add_vertex(Vec3f(x, y, a * x + b * y + c)); };
+  const auto p0 = at(-2, -2), p1 = at(3, -2), p2 = at(3, 3), p3 = at(-2, 3);
+  m.add_face(p0, p1, p2);
+  m.add_face(p0, p2, p3);
+  compute_angle_weighted_normals(m);
+  return m;
+}
+
+// Over a flat base (normal +z) and a high plane, every sample is the plane's height above
+// its point, and the coarser level's interpolation of a linear function is exact too.
+TEST(DisplacementStream, PlaneIsSampledExactlyAtEveryLevel) {
+  const Mesh base = test::make_grid(3, 2);
+  const float a = 0.02f, b = -0.01f, c = 0.003f;
+  DisplacementStreamOptions o;
+  o.levels = 4;
+  const DisplacementStream s = sample_displacement_stream(base, plane(a, b, c), o);
+  ASSERT_EQ(s.levels.size(), 4u);
+  EXPECT_EQ(s.misses, 0u);
+  for (const DisplacementLevel& level : s.levels) {
+    const int n = level.segments;
+    for (int t = 0; t < s.triangles; ++t) {
+      const auto hs = face_halfedges(base, FaceHandle(t));
+      Vec3f corner[3];
+      for (int k = 0; k < 3; ++k) corner[k] = base.point(base.to_vertex_handle(hs[static_cast<size_t>(k)]));
+      int k = 0;
+      for (int i = 0; i <= n; ++i)
+        for (int j = 0; j <= n - i; ++j, ++k) {
+          const Vec3f p = corner[0] * (static_cast<float>(n - i - j) / n) + corner[1] * (static_cast<float>(i) / n) +
+                          corner[2] * (static_cast<float>(j) / n);
+          const float expect = a * p[0] + b * p[1] + c;
+          const size_t at = static_cast<size_t>(t * level.vertices_per_triangle() + k);
+          EXPECT_NEAR(level.value[at], expect, 1e-6f) << "level " << n << " t " << t << " (" << i << "," << j << ")";
+          EXPECT_NEAR(level.coarse[at], expect, 1e-6f);
+        }
+    }
+  }
+}
+
+// Two triangles sharing an edge compute the same value at every point of it, bit for bit,
+// over a curved high surface: the tessellations meet without cracks.
+TEST(DisplacementStream, SharedEdgesAgreeBitForBit) {
+  const Mesh base = test::make_grid(4, 4);
+  Mesh high = test::make_parametric(
+      32, 32, [](double u, double v) { return Vec3f(static_cast<float>(u), static_cast<float>(v), static_cast<float>(0.02 * std::sin(9 * u) * std::cos(7 * v))); },
+      false, false);
+  DisplacementStreamOptions o;
+  o.levels = 4;
+  const DisplacementStream s = sample_displacement_stream(base, high, o);
+  const DisplacementLevel& level = s.levels.back();
+  const int n = level.segments;
+  // Each sample keyed by its exact position (edge points are computed from the same end).
+  std::map<std::array<float, 2>, float> seen;
+  int shared = 0;
+  for (int t = 0; t < s.triangles; ++t) {
+    const auto hs = face_halfedges(base, FaceHandle(t));
+    int k = 0;
+    for (int i = 0; i <= n; ++i)
+      for (int j = 0; j <= n - i; ++j, ++k) {
+        if (i != 0 && j != 0 && i + j != n) continue;  // interior points are not shared
+        Vec3f corner[3];
+        for (int q = 0; q < 3; ++q) corner[q] = base.point(base.to_vertex_handle(hs[static_cast<size_t>(q)]));
+        const Vec3f p = (corner[0] * static_cast<float>(n - i - j) + corner[1] * static_cast<float>(i) + corner[2] * static_cast<float>(j)) / static_cast<float>(n);
+        const std::array<float, 2> key{std::round(p[0] * 4096) / 4096, std::round(p[1] * 4096) / 4096};
+        const float v = level.value[static_cast<size_t>(t * level.vertices_per_triangle() + k)];
+        const auto [it, fresh] = seen.emplace(key, v);
+        if (!fresh) {
+          ++shared;
+          EXPECT_EQ(it->second, v) << "at " << key[0] << "," << key[1];
+        }
+      }
+  }
+  EXPECT_GT(shared, 100);
+}
+
+TEST(DisplacementStream, EncodedVerticesAreEightBytesWithinTheirBound) {
+  const Mesh base = test::make_grid(2, 2);
+  DisplacementStreamOptions o;
+  o.levels = 3;
+  const DisplacementStream s = sample_displacement_stream(base, plane(0.05f, 0.0f, -0.01f), o);
+  const EncodedStream e = encode_displacement_stream(s);
+  const double bound = (s.max_value - s.min_value) / (2.0 * kDisplacementSteps);
+  EXPECT_LE(e.max_error, bound * 1.0001 + 1e-9);
+  EXPECT_GT(e.max_error, 0.0);
+  for (size_t l = 0; l < e.vertices.size(); ++l) {
+    const int n = e.segments[l];
+    size_t k = 0;
+    for (int t = 0; t < s.triangles; ++t)
+      for (int i = 0; i <= n; ++i)
+        for (int j = 0; j <= n - i; ++j, ++k) {
+          const DecodedVertex d = decode_vertex(e.vertices[l][k], e.min_value, e.max_value);
+          EXPECT_EQ(d.triangle, static_cast<uint32_t>(t));
+          EXPECT_EQ(d.i, i);
+          EXPECT_EQ(d.j, j);
+          EXPECT_NEAR(d.value, s.levels[l].value[k], bound * 1.0001);
+        }
+  }
+  test::TempDir dir;
+  write_displacement_stream(e, static_cast<int>(base.n_vertices()), static_cast<int>(base.n_faces()), (dir / "d.bin").string());
+  size_t expected = 8 + 4 * 4 + 8;
+  for (const auto& level : e.vertices) expected += 8 + 8 * level.size();
+  EXPECT_EQ(std::filesystem::file_size(dir / "d.bin"), expected);
+}
+
+}  // namespace
+}  // namespace meso
