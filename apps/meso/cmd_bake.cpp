@@ -48,7 +48,7 @@ const std::map<std::string, std::string>& map_files() {
 
 void add_bake(CLI::App& app, Context& ctx) {
   struct Args {
-    std::string low, high, out_dir, size = "1024", front, back, bunch, hit = "nearest";
+    std::string low, high, cage, out_dir, size = "1024", front, back, bunch, hit = "nearest";
     std::string maps = "displacement,normal_ts,coverage";
     float max_miss_rate = 1;
     int dilate = -1, samples = 1;
@@ -58,6 +58,8 @@ void add_bake(CLI::App& app, Context& ctx) {
   CLI::App* sub = app.add_subcommand("bake", "Bake displacement and tangent-space normal maps from a high mesh onto a base mesh");
   sub->add_option("--low", args->low, "Base mesh with a unique UV mapping")->required();
   sub->add_option("--high", args->high, "High-poly mesh")->required();
+  sub->add_option("--cage", args->cage,
+                  "Cage mesh with the base's topology: rays go from each base point toward the cage's point and stop there");
   sub->add_option("-o,--output", args->out_dir, "Output folder (the maps chosen with --maps)")->required();
   sub->add_option("--maps", args->maps,
                   "Comma-separated maps to write: displacement (.exr, float), displacement_png (16-bit, normalised; scale and bias "
@@ -113,6 +115,14 @@ void add_bake(CLI::App& app, Context& ctx) {
       const Mesh low = load_mesh(ctx.globals, args->low, low_report);
       if (!has_uvs(low)) throw InputError(args->low, "has no texture coordinates; bake needs a UV-mapped base mesh");
       const Mesh high = load_mesh(ctx.globals, args->high, high_report);
+      Mesh cage;
+      nlohmann::json cage_report;
+      if (!args->cage.empty()) {
+        cage = load_mesh(ctx.globals, args->cage, cage_report);
+        if (!same_topology(low, cage))
+          throw InputError(args->cage, "is not a cage of " + args->low + ": it needs the same vertices and faces in the same order");
+        o.cage = &cage;
+      }
       const float diagonal = bounding_box(high).diagonal();
       o.front = parse_length(args->front, diagonal, "--front");
       o.back = parse_length(args->back, diagonal, "--back");
@@ -157,6 +167,7 @@ void add_bake(CLI::App& app, Context& ctx) {
                 {"bunch", r.bunch},
                 {"samples", r.samples},
                 {"hit_rule", hit_rule_name(o.hit)},
+                {"cage", args->cage},
                 {"ignore_backfaces", o.ignore_backfaces},
                 {"ambiguous", r.ambiguous},
                 {"covered_texels", r.covered_texels},

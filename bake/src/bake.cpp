@@ -68,6 +68,16 @@ int choose_hit(const std::vector<RayHit>& hits, HitRule rule, float bunch, bool&
 
 }  // namespace
 
+bool same_topology(const Mesh& base, const Mesh& cage) {
+  if (base.n_vertices() != cage.n_vertices() || base.n_faces() != cage.n_faces()) return false;
+  for (auto f : base.faces()) {
+    const auto a = face_halfedges(base, f), b = face_halfedges(cage, FaceHandle(f.idx()));
+    for (size_t k = 0; k < 3; ++k)
+      if (base.to_vertex_handle(a[k]).idx() != cage.to_vertex_handle(b[k]).idx()) return false;
+  }
+  return true;
+}
+
 const char* hit_rule_name(HitRule r) {
   switch (r) {
     case HitRule::nearest: return "nearest";
@@ -133,7 +143,21 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
     const double sign = frames[static_cast<size_t>(hs[0].idx())].sign;
     const Eigen::Vector3d b = sign * n.cross(t);
     if (!(n.norm() > 1e-12)) return false;  // opposite normals cancel: no direction to cast along
-    const Eigen::Vector3d dir = n.normalized();
+    Eigen::Vector3d dir = n.normalized();
+    float front_reach = r.front;
+    if (o.cage) {
+      // Toward the cage's point, and no further.
+      Eigen::Vector3d c = Eigen::Vector3d::Zero();
+      for (int k = 0; k < 3; ++k) {
+        const Vec3f& cv = o.cage->point(o.cage->to_vertex_handle(face_halfedges(*o.cage, FaceHandle(s.face))[static_cast<size_t>(k)]));
+        c += s.bary[static_cast<size_t>(k)] * (Eigen::Vector3d(cv[0], cv[1], cv[2]) - origin);
+      }
+      const Eigen::Vector3d to_cage = c - p;
+      if (to_cage.norm() > eps) {
+        dir = to_cage.normalized();
+        front_reach = static_cast<float>(to_cage.norm());
+      }
+    }
     const Vec3f d(static_cast<float>(dir.x()), static_cast<float>(dir.y()), static_cast<float>(dir.z()));
     // Both ways from the base surface; the hit nearer to it wins (outward on a tie).
     // Each ray starts `eps` behind the base point so that a high surface lying exactly
@@ -174,7 +198,7 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
       }
     };
     hits.clear();
-    gather(+1, r.front);
+    gather(+1, front_reach);
     gather(-1, r.back);
     std::sort(hits.begin(), hits.end(), [](const RayHit& p1, const RayHit& p2) { return p1.d < p2.d; });
     bool unsure = false;

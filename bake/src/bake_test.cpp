@@ -194,6 +194,29 @@ TEST(Bake, SupersamplingAveragesOverTheTexel) {
   EXPECT_NEAR(single.displacement.at(3, 0), rise, 1e-6f) << "the centre 0.4375 lies right of the step";
 }
 
+// A cage leaning (0.02, 0, 0.05) away from a flat base: rays go toward it and stop at it,
+// so a layer beyond the cage is not found outward, and distances run along the leaning ray.
+TEST(Bake, CageSetsTheRaysDirectionAndOutwardReach) {
+  const Mesh base = test::make_grid(2, 2);
+  Mesh cage = base;
+  for (auto v : cage.vertices()) cage.set_point(v, cage.point(v) + Vec3f(0.02f, 0.0f, 0.05f));
+  ASSERT_TRUE(same_topology(base, cage));
+  const double slant = std::sqrt(0.02 * 0.02 + 0.05 * 0.05) / 0.05;  // ray length per unit height
+  BakeOptions o;
+  o.width = o.height = 8;
+  o.front = o.back = 0.2f;
+  o.cage = &cage;
+  const BakeResult near = bake(base, make_layers({{0.01f, true}}), o);
+  EXPECT_EQ(near.misses, 0u);
+  EXPECT_NEAR(near.displacement.at(4, 4), 0.01 * slant, 1e-5);
+  const BakeResult beyond = bake(base, make_layers({{0.06f, true}, {-0.03f, true}}), o);
+  EXPECT_NEAR(beyond.displacement.at(4, 4), -0.03 * slant, 1e-5) << "the layer beyond the cage is out of reach";
+  o.cage = nullptr;
+  EXPECT_NEAR(bake(base, make_layers({{0.06f, true}, {-0.03f, true}}), o).displacement.at(4, 4), -0.03f, 1e-5f) << "nearest without cage";
+  Mesh other = test::make_grid(3, 2);
+  EXPECT_FALSE(same_topology(base, other));
+}
+
 TEST(Bake, IdenticalMeshesGiveZeroAndFlatNormals) {
   const Mesh cube = test::make_seamed_cube();
   BakeOptions o;

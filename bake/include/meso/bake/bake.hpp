@@ -43,7 +43,16 @@ struct BakeOptions {
   // n x n sub-texels, box-filtered (mean displacement, mean normal renormalised). Samples
   // may fall on any face of the texel's chart; 1 samples the texel centre exactly.
   int samples = 1;
+  // A cage: a mesh with the base's topology (same vertices, same faces in the same order),
+  // usually the base pushed outward. Each ray then leaves the base point toward the cage's
+  // corresponding point, and reaches outward exactly to it (the cage bounds the search);
+  // inward it reaches `back`. Null: along the interpolated normal, `front` outward.
+  const Mesh* cage = nullptr;
 };
+
+// Whether `cage` can serve as a cage of `base`: same vertex count and the same vertices on
+// every face, in order.
+bool same_topology(const Mesh& base, const Mesh& cage);
 
 struct BakeResult {
   // Signed distance from the base surface to the high surface along the base normal, in
