@@ -52,7 +52,7 @@ void add_bake(CLI::App& app, Context& ctx) {
     std::string maps = "displacement,normal_ts,coverage";
     float max_miss_rate = 1;
     int dilate = -1, samples = 1;
-    bool ignore_backfaces = false;
+    bool ignore_backfaces = false, match_by_name = false;
   };
   auto args = std::make_shared<Args>();
   CLI::App* sub = app.add_subcommand("bake", "Bake displacement and tangent-space normal maps from a high mesh onto a base mesh");
@@ -79,6 +79,9 @@ void add_bake(CLI::App& app, Context& ctx) {
                   "triangles of the texel's chart)")
       ->check(CLI::Range(1, 256))
       ->capture_default_str();
+  sub->add_flag("--match-by-name", args->match_by_name,
+                "Pair base and high parts by name (wheel_low with wheel_high; case, a trailing .NNN and _low/_lo/_lp, "
+                "_high/_hi/_hp ignored): rays never hit a neighbouring part");
   sub->add_flag("--ignore-backfaces", args->ignore_backfaces, "Ignore high surfaces that face against the base surface");
   sub->add_option("--bunch", args->bunch,
                   "Hits closer than this form one bunch (a fold, a decal): its outermost hit is taken; object units or a "
@@ -96,6 +99,7 @@ void add_bake(CLI::App& app, Context& ctx) {
         if (args->hit == hit_rule_name(rule)) o.hit = rule;
       o.ignore_backfaces = args->ignore_backfaces;
       o.samples = args->samples;
+      o.match_by_name = args->match_by_name;
       std::vector<std::string> wanted;
       {
         std::stringstream list(args->maps);
@@ -155,6 +159,8 @@ void add_bake(CLI::App& app, Context& ctx) {
       }
       outputs.commit();
       if (r.misses) warn(ctx.globals, std::to_string(r.misses) + " of " + std::to_string(r.covered_texels) + " covered texels found no high surface within reach");
+      if (!r.unmatched_parts.empty())
+        warn(ctx.globals, std::to_string(r.unmatched_parts.size()) + " base parts have no high part of the same name (they see the whole high mesh)");
       if (r.ambiguous) warn(ctx.globals, std::to_string(r.ambiguous) + " texels had an ambiguous choice of hit (coverage value 0.75)");
       info(ctx.globals, "wrote " + std::to_string(wanted.size()) + " maps to " + dir.string());
       report = {{"command", "bake"},
@@ -168,6 +174,8 @@ void add_bake(CLI::App& app, Context& ctx) {
                 {"samples", r.samples},
                 {"hit_rule", hit_rule_name(o.hit)},
                 {"cage", args->cage},
+                {"matched_parts", r.matched_parts},
+                {"unmatched_parts", r.unmatched_parts},
                 {"ignore_backfaces", o.ignore_backfaces},
                 {"ambiguous", r.ambiguous},
                 {"covered_texels", r.covered_texels},

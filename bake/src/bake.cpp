@@ -13,6 +13,8 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
+#include <cctype>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -104,10 +106,99 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
   // Work relative to the base's centre (see RayScene).
   const Vec3f center = bounding_box(low).center();
   const Eigen::Vector3d origin(center[0], center[1], center[2]);
-  RayScene scene(high, origin);
-  // High vertex normals, indexed like the scene's vertex array.
-  std::vector<Vec3f> high_normals(high.n_vertices());
-  for (auto v : high.vertices()) high_normals[static_cast<size_t>(v.idx())] = high.normal(v);
+  // The high surfaces rays may hit: the whole high mesh, or with match_by_name one part per
+  // base part. Each has its scene and its vertex normals indexed like the scene's vertices.
+  struct Part {
+    std::unique_ptr<RayScene> scene;
+    std::vector<Vec3f> normals;
+  };
+  std::vector<Part> parts;
+  std::vector<int> face_part(low.n_faces(), 0);
+  auto add_part = [&](const std::vector<bool>* keep) {
+    Mesh sub;
+    std::vector<Vec3f> normals;
+    if (!keep) {
+      sub = high;
+      for (auto v : high.vertices()) normals.push_back(high.normal(v));
+    } else {
+      std::vector<int> map(high.n_vertices(), -1);
+      for (auto f : high.faces()) {
+        if (!(*keep)[static_cast<size_t>(f.idx())]) continue;
+        std::vector<VertexHandle> vs;
+        for (auto v : high.fv_range(f)) {
+          int& m = map[static_cast<size_t>(v.idx())];
+          if (m < 0) {
+            m = sub.add_vertex(high.point(v)).idx();
+            normals.push_back(high.normal(v));
+          }
+          vs.push_back(VertexHandle(m));
+        }
+        if (!sub.add_face(vs).is_valid()) {  // non-manifold within the part: on its own vertices
+          for (auto& h : vs) {
+            const Vec3f q = sub.point(h);
+            normals.push_back(normals[static_cast<size_t>(h.idx())]);
+            h = sub.add_vertex(q);
+          }
+          sub.add_face(vs);
+        }
+      }
+    }
+    Part part;
+    part.scene = std::make_unique<RayScene>(sub, origin);
+    part.normals = std::move(normals);
+    parts.push_back(std::move(part));
+    return static_cast<int>(parts.size()) - 1;
+  };
+  if (!o.match_by_name) {
+    add_part(nullptr);
+  } else {
+    auto key = [](std::string name, bool is_high) {
+      std::transform(name.begin(), name.end(), name.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+      const size_t dot = name.rfind('.');
+      if (dot != std::string::npos && dot + 1 < name.size() &&
+          std::all_of(name.begin() + static_cast<long>(dot) + 1, name.end(), [](unsigned char c) { return std::isdigit(c) != 0; }))
+        name.erase(dot);
+      static const std::array<const char*, 3> high_suffixes{"_high", "_hi", "_hp"}, low_suffixes{"_low", "_lo", "_lp"};
+      for (const char* suffix : is_high ? high_suffixes : low_suffixes) {
+        const std::string sfx(suffix);
+        if (name.size() > sfx.size() && name.compare(name.size() - sfx.size(), sfx.size(), sfx) == 0) return name.substr(0, name.size() - sfx.size());
+      }
+      return name;
+    };
+    const auto& low_names = group_names(low);
+    const auto& high_names = group_names(high);
+    std::vector<int> low_part(low_names.size(), -1);
+    int whole = -1;
+    for (size_t g = 0; g < low_names.size(); ++g) {
+      const std::string k = key(low_names[g], false);
+      std::vector<bool> keep(high.n_faces(), false);
+      bool any = false;
+      for (auto f : high.faces()) {
+        const int hg = face_group(high, f);
+        if (hg >= 0 && static_cast<size_t>(hg) < high_names.size() && key(high_names[static_cast<size_t>(hg)], true) == k) {
+          keep[static_cast<size_t>(f.idx())] = true;
+          any = true;
+        }
+      }
+      if (any) {
+        low_part[g] = add_part(&keep);
+        r.matched_parts.push_back(low_names[g]);
+      } else {
+        if (whole < 0) whole = add_part(nullptr);
+        low_part[g] = whole;
+        r.unmatched_parts.push_back(low_names[g]);
+      }
+    }
+    for (auto f : low.faces()) {
+      const int g = face_group(low, f);
+      if (g >= 0 && static_cast<size_t>(g) < low_part.size()) {
+        face_part[static_cast<size_t>(f.idx())] = low_part[static_cast<size_t>(g)];
+      } else {
+        if (whole < 0) whole = add_part(nullptr);
+        face_part[static_cast<size_t>(f.idx())] = whole;
+      }
+    }
+  }
 
   r.displacement = Image(o.width, o.height, 1, 0.0f);
   r.normal_ts = Image(o.width, o.height, 3, 0.0f);
@@ -126,6 +217,9 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
   };
   auto trace = [&](int face, const std::array<float, 3>& bary, std::vector<RayHit>& hits, SampleValue& value) -> bool {
     const TexelSample s{face, bary, true};
+    const Part& part = parts[static_cast<size_t>(face_part[static_cast<size_t>(face)])];
+    const RayScene& scene = *part.scene;
+    const std::vector<Vec3f>& high_normals = part.normals;
     const auto hs = face_halfedges(low, FaceHandle(s.face));
     // Interpolated position, normal and MikkTSpace frame (unnormalised, as the shader).
     Eigen::Vector3d p = Eigen::Vector3d::Zero(), n = Eigen::Vector3d::Zero(), t = Eigen::Vector3d::Zero();

@@ -217,6 +217,40 @@ TEST(Bake, CageSetsTheRaysDirectionAndOutwardReach) {
   EXPECT_FALSE(same_topology(base, other));
 }
 
+// Parts paired by name: each base part only sees its own high part, even where another
+// part's surface is nearer; unmatched base parts see everything and are reported.
+TEST(Bake, MatchByNamePairsParts) {
+  Mesh base = test::make_grid(4, 4);
+  std::vector<int> low_group;
+  for (auto f : base.faces()) {
+    Vec3f c(0, 0, 0);
+    for (auto v : base.fv_range(f)) c += base.point(v) / 3.0f;
+    low_group.push_back(c[0] < 0.5f ? 0 : 1);
+  }
+  set_face_groups(base, {"Box_low", "Plate_LP.001"}, low_group);
+  Mesh high = make_layers({{0.01f, true}, {-0.02f, true}});
+  std::vector<int> high_group;
+  for (auto f : high.faces()) high_group.push_back(high.point(*high.fv_range(f).begin())[2] > 0 ? 0 : 1);
+  set_face_groups(high, {"box_high", "plate_high"}, high_group);
+  BakeOptions o;
+  o.width = o.height = 8;
+  o.front = o.back = 0.05f;
+  o.match_by_name = true;
+  const BakeResult r = bake(base, high, o);
+  EXPECT_EQ(r.matched_parts.size(), 2u);
+  EXPECT_TRUE(r.unmatched_parts.empty());
+  EXPECT_NEAR(r.displacement.at(1, 4), 0.01f, 1e-6f) << "box texel";
+  EXPECT_NEAR(r.displacement.at(6, 4), -0.02f, 1e-6f) << "plate texel: the nearer box surface is not its part";
+  o.match_by_name = false;
+  EXPECT_NEAR(bake(base, high, o).displacement.at(6, 4), 0.01f, 1e-6f) << "unpaired, the nearest wins";
+  set_face_groups(high, {"box_high", "other_high"}, high_group);
+  o.match_by_name = true;
+  const BakeResult partial = bake(base, high, o);
+  ASSERT_EQ(partial.unmatched_parts.size(), 1u);
+  EXPECT_EQ(partial.unmatched_parts[0], "Plate_LP.001");
+  EXPECT_NEAR(partial.displacement.at(6, 4), 0.01f, 1e-6f) << "an unmatched part sees the whole high mesh";
+}
+
 TEST(Bake, IdenticalMeshesGiveZeroAndFlatNormals) {
   const Mesh cube = test::make_seamed_cube();
   BakeOptions o;

@@ -10,6 +10,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace meso {
@@ -48,6 +49,11 @@ struct BakeOptions {
   // corresponding point, and reaches outward exactly to it (the cage bounds the search);
   // inward it reaches `back`. Null: along the interpolated normal, `front` outward.
   const Mesh* cage = nullptr;
+  // Pair parts by name: a base part (face group) "wheel_low" only sees the high part(s)
+  // "wheel_high", so rays never hit a neighbouring part. Names compare without case, a
+  // trailing ".NNN" (Blender's duplicates) and the suffix _low/_lo/_lp resp.
+  // _high/_hi/_hp. Base parts without a match see the whole high mesh (and are reported).
+  bool match_by_name = false;
 };
 
 // Whether `cage` can serve as a cage of `base`: same vertex count and the same vertices on
@@ -71,6 +77,7 @@ struct BakeResult {
   // Per base face (face order): covered texels, misses and ambiguous texels, for the
   // artist's report.
   std::vector<uint32_t> face_texels, face_misses, face_ambiguous;
+  std::vector<std::string> matched_parts, unmatched_parts;  // base part names (match_by_name)
   float front = 0, back = 0;  // the reach actually used
   float bunch = 0;            // the bunch distance actually used
   int samples = 1;            // samples per texel actually used (a square)
