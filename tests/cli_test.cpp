@@ -58,6 +58,25 @@ TEST(Cli, HelpVersionAndMethodList) {
   EXPECT_EQ(methods.out, "bump\nparallax\noffset-limited\nslope\niterative-parallax\nsteep\nrelief\npom\ncone\nrelaxed-cone\nsphere-tracing\n");
 }
 
+// uvpack pack: the seamed cube's six charts packed with padding; the checker agrees.
+TEST(Cli, UvpackPackMakesAUniqueMappingWithPadding) {
+  test::TempDir dir;
+  write_mesh(test::make_seamed_cube(), dir / "cube.obj");
+  const Result r = run("uvpack pack " + (dir / "cube.obj").string() + " -o " + (dir / "packed.obj").string() + " --size 128 --padding 3 --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto report = nlohmann::json::parse(r.out);
+  EXPECT_EQ(report["charts"], 6);
+  EXPECT_GT(report["utilization"].get<double>(), 0.3);
+  const Result check = run("uvpack check " + (dir / "packed.obj").string() + " --size 128 --padding 3 --fail-on overlap,shared,padding,outside");
+  EXPECT_EQ(check.code, 0) << check.err;
+  Mesh flat = test::make_seamed_cube();
+  flat.release_halfedge_texcoords2D();
+  write_mesh(flat, dir / "nouv.ply");
+  const Result nouv = run("uvpack pack " + (dir / "nouv.ply").string() + " -o " + (dir / "x.obj").string());
+  EXPECT_EQ(nouv.code, 3);
+  EXPECT_FALSE(fs::exists(dir / "x.obj"));
+}
+
 TEST(Cli, BadUsageExitsTwo) {
   EXPECT_EQ(run("").code, 2);
   EXPECT_EQ(run("no-such-command").code, 2);

@@ -1,0 +1,98 @@
+#include "meso/uvpack/uv_pack.hpp"
+
+#include "meso/uvpack/uv_check.hpp"
+#include "test_support.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+namespace meso {
+namespace {
+
+// `count` separate quads in 3D, each its own chart, whose UVs all start at the origin (so
+// every chart overlaps every other before packing), sizes varying by a factor of 8.
+Mesh scattered_quads(int count, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> size(0.05f, 0.4f), aspect(0.3f, 1.0f);
+  Mesh m;
+  m.request_halfedge_texcoords2D();
+  for (int q = 0; q < count; ++q) {
+    const float w = size(rng), h = w * aspect(rng);
+    const float z = static_cast<float>(q);
+    const VertexHandle a = m.add_vertex(Vec3f(0, 0, z)), b = m.add_vertex(Vec3f(w, 0, z)), c = m.add_vertex(Vec3f(w, h, z)),
+                       d = m.add_vertex(Vec3f(0, h, z));
+    for (const auto& tri : {std::array<VertexHandle, 3>{a, b, c}, std::array<VertexHandle, 3>{a, c, d}}) {
+      const FaceHandle f = m.add_face(tri[0], tri[1], tri[2]);
+      for (auto hh : face_halfedges(m, f)) {
+        const Vec3f p = m.point(m.to_vertex_handle(hh));
+        m.set_texcoord2D(hh, Vec2f(p[0], p[1]));
+      }
+    }
+  }
+  compute_angle_weighted_normals(m);
+  return m;
+}
+
+double uv_area(const Mesh& m, FaceHandle f) { return 0.5 * std::abs(static_cast<double>(uv_double_area(m, f))); }
+
+// The packed atlas is a unique mapping with the requested padding, as the checker sees it,
+// and every chart moved rigidly at one common scale.
+TEST(UvPack, PacksWithoutOverlapAndWithPadding) {
+  for (const auto& [count, size, padding] : {std::tuple{24, 256, 2}, std::tuple{60, 512, 4}, std::tuple{7, 64, 1}}) {
+    Mesh m = scattered_quads(count, static_cast<unsigned>(count));
+    std::vector<double> before;
+    for (auto f : m.faces()) before.push_back(uv_area(m, f));
+    UvPackOptions o;
+    o.size = size;
+    o.padding = padding;
+    const UvPackReport r = pack_uv_charts(m, o);
+    EXPECT_EQ(r.charts, static_cast<size_t>(count));
+    UvCheckOptions check;
+    check.size = size;
+    check.padding = padding;
+    check.overlay = false;
+    const UvCheckReport c = check_uv_mapping(m, check);
+    EXPECT_TRUE(c.overlapping_faces.empty()) << count;
+    EXPECT_TRUE(c.shared_texel_faces.empty()) << count;
+    EXPECT_TRUE(c.padding_violations.empty()) << count << " charts: " << c.padding_violations.size() << " pairs too close";
+    EXPECT_TRUE(c.outside_faces.empty()) << count;
+    EXPECT_TRUE(c.flipped_faces.empty()) << "rotations keep the winding";
+    // One scale for every chart: areas scale by (scale / size)^2.
+    const double k = r.scale / size;
+    for (auto f : m.faces()) EXPECT_NEAR(uv_area(m, f), before[static_cast<size_t>(f.idx())] * k * k, 1e-6 + 1e-3 * before[static_cast<size_t>(f.idx())] * k * k);
+    EXPECT_GT(r.utilization, 0.25) << count << " charts at " << size;
+    EXPECT_NEAR(r.utilization, c.utilization, 1e-9) << "the packer's count of touched texels is the checker's";
+  }
+}
+
+TEST(UvPack, SeamedCubeKeepsItsSixCharts) {
+  Mesh cube = test::make_seamed_cube();
+  UvPackOptions o;
+  o.size = 128;
+  o.padding = 2;
+  const UvPackReport r = pack_uv_charts(cube, o);
+  EXPECT_EQ(r.charts, 6u);
+  UvCheckOptions check;
+  check.size = 128;
+  check.padding = 2;
+  check.overlay = false;
+  const UvCheckReport c = check_uv_mapping(cube, check);
+  EXPECT_TRUE(c.shared_texel_faces.empty());
+  EXPECT_TRUE(c.padding_violations.empty());
+  EXPECT_EQ(c.charts, 6u);
+}
+
+TEST(UvPack, SameUvsTwice) {
+  Mesh a = scattered_quads(30, 3), b = scattered_quads(30, 3);
+  UvPackOptions o;
+  o.size = 256;
+  pack_uv_charts(a, o);
+  pack_uv_charts(b, o);
+  for (auto f : a.faces())
+    for (auto h : face_halfedges(a, f)) ASSERT_EQ(a.texcoord2D(h), b.texcoord2D(h));
+}
+
+}  // namespace
+}  // namespace meso
