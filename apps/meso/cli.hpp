@@ -53,6 +53,9 @@ extern const CLI::Validator Finite;
 // "512" or "512x256" -> width, height. Throws UsageError.
 void parse_size(const std::string& text, int& width, int& height);
 
+// The whole of `text` as a finite number, or false (nothing is thrown).
+bool parse_finite(const std::string& text, float& value);
+
 }  // namespace meso::cli
 
 #include "meso/core/mesh.hpp"

@@ -20,14 +20,8 @@ float parse_length(const std::string& text, float diagonal, const char* option) 
   if (text.empty()) return 0.0f;
   const bool percent = text.back() == '%';
   const std::string number = percent ? text.substr(0, text.size() - 1) : text;
-  size_t used = 0;
   float v = 0;
-  try {
-    v = std::stof(number, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != number.size() || !std::isfinite(v) || v < 0)
+  if (!parse_finite(number, v) || v < 0)
     throw UsageError(std::string(option) + " '" + text + "': expected a non-negative length or a percentage such as 5%");
   return percent ? v / 100.0f * diagonal : v;
 }

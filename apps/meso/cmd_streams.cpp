@@ -163,14 +163,8 @@ void add_streams(CLI::App& app, Context& ctx) {
         std::stringstream list(vdm->curvatures);
         std::string item;
         while (std::getline(list, item, ',')) {
-          size_t used = 0;
           float v = 0;
-          try {
-            v = std::stof(item, &used);
-          } catch (const std::exception&) {
-            used = 0;
-          }
-          if (item.empty() || used != item.size() || !std::isfinite(v)) throw UsageError("--curvatures: '" + item + "' is not a number");
+          if (!parse_finite(item, v)) throw UsageError("--curvatures: '" + item + "' is not a number");
           o.curvatures.push_back(v);
         }
       }

@@ -39,6 +39,16 @@ const CLI::Validator Finite(
     },
     "FINITE");
 
+bool parse_finite(const std::string& text, float& value) {
+  size_t used = 0;
+  try {
+    value = std::stof(text, &used);
+  } catch (const std::exception&) {
+    return false;
+  }
+  return !text.empty() && used == text.size() && std::isfinite(value);
+}
+
 void parse_size(const std::string& text, int& width, int& height) {
   const auto x = text.find('x');
   try {

@@ -1,5 +1,7 @@
 #include "meso/streams/cone_map.hpp"
 
+#include "test_fields.hpp"
+
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
@@ -11,27 +13,15 @@
 namespace meso {
 namespace {
 
-HeightField field_from(int w, int h, Border border, const std::function<float(int, int)>& f) {
-  Image img(w, h, 1);
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) img.at(x, y) = f(x, y);
-  return make_height_field(img, border);
-}
+using test::bumps;
+using test::field_from;
+using test::noise;
 
-HeightField noise(int w, int h, Border border, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> d(0.0f, 1.0f);
-  return field_from(w, h, border, [&](int, int) { return d(rng); });
-}
+
 
 // Structured maps: steps, a single spike, smooth bumps.
 HeightField steps(int w, int h) {
   return field_from(w, h, Border::clamp, [](int x, int y) { return static_cast<float>(((x / 3) + (y / 5)) % 4); });
-}
-HeightField bumps(int w, int h, Border border) {
-  return field_from(w, h, border, [&](int x, int y) {
-    return static_cast<float>(std::sin(6.2831853 * x / w) * std::cos(6.2831853 * 2 * y / h));
-  });
 }
 
 double ratio_texels(const Image& cone, int i, int j) { return static_cast<double>(cone.at(i, j, 1)) * cone.width; }

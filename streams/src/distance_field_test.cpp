@@ -2,6 +2,8 @@
 
 #include "meso/streams/pyramid.hpp"
 
+#include "test_fields.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -12,13 +14,10 @@
 namespace meso {
 namespace {
 
-HeightField noise(int w, int h, Border border, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> d(0.0f, 1.0f);
-  Image img(w, h, 1);
-  for (float& v : img.pixels) v = d(rng);
-  return make_height_field(img, border);
-}
+using test::bumps;
+using test::field_from;
+using test::noise;
+
 
 // The definition, by brute force: distance from each voxel centre to every box
 // [x, x+1] x [y, y+1] x [0, M_xy] (texel units, heights scaled by relief * W), in units of u.

@@ -3,6 +3,8 @@
 #include "meso/streams/cone_map.hpp"
 #include "meso/streams/pyramid.hpp"
 
+#include "test_fields.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -12,20 +14,11 @@
 namespace meso {
 namespace {
 
-HeightField noise(int w, int h, Border border, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> d(0.0f, 1.0f);
-  Image img(w, h, 1);
-  for (float& v : img.pixels) v = d(rng);
-  return make_height_field(img, border);
-}
+using test::bumps;
+using test::field_from;
+using test::noise;
 
-HeightField bumps(int w, int h, Border border) {
-  Image img(w, h, 1);
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) img.at(x, y) = static_cast<float>(std::sin(6.2831853 * x / w) * std::cos(6.2831853 * 2 * y / h));
-  return make_height_field(img, border);
-}
+
 
 // The surface at height z along the ray, minus the ray: >= 0 means at or below the surface.
 double below(const HeightField& f, const HeightRay& r, double t) { return f.bilinear(r.x + t * r.dx, r.y + t * r.dy) - r.z_at(t); }
