@@ -43,7 +43,7 @@ const std::map<std::string, std::string>& map_files() {
 void add_bake(CLI::App& app, Context& ctx) {
   struct Args {
     std::string low, high, cage, out_dir, size = "1024", front, back, bunch, hit = "nearest";
-    std::string maps = "displacement,normal_ts,coverage";
+    std::string maps = "displacement,normal_ts,coverage", basis = "linear";
     float max_miss_rate = 1;
     int dilate = -1, samples = 1;
     bool ignore_backfaces = false, match_by_name = false;
@@ -65,6 +65,11 @@ void add_bake(CLI::App& app, Context& ctx) {
                   "Ray reach outward from the base: object units, or a percentage of the high mesh's bounding-box diagonal "
                   "(default 5%)");
   sub->add_option("--back", args->back, "Ray reach inward from the base, as --front (default 5%)");
+  sub->add_option("--basis", args->basis,
+                  "Base surface the rays leave from: linear (flat triangles, interpolated normals) or pn (curved PN triangles "
+                  "from the corner normals, for renderers that tessellate into them)")
+      ->check(CLI::IsMember({"linear", "pn"}))
+      ->capture_default_str();
   sub->add_option("--hit", args->hit, "Which hit gives a texel its value: nearest, furthest, front-else-nearest, front-only")
       ->check(CLI::IsMember({"nearest", "furthest", "front-else-nearest", "front-only"}))
       ->capture_default_str();
@@ -94,6 +99,7 @@ void add_bake(CLI::App& app, Context& ctx) {
       o.ignore_backfaces = args->ignore_backfaces;
       o.samples = args->samples;
       o.match_by_name = args->match_by_name;
+      o.basis = args->basis == "pn" ? BakeBasis::pn : BakeBasis::linear;
       std::vector<std::string> wanted;
       {
         std::stringstream list(args->maps);
@@ -168,6 +174,7 @@ void add_bake(CLI::App& app, Context& ctx) {
                 {"samples", r.samples},
                 {"hit_rule", hit_rule_name(o.hit)},
                 {"cage", args->cage},
+                {"basis", args->basis},
                 {"matched_parts", r.matched_parts},
                 {"unmatched_parts", r.unmatched_parts},
                 {"ignore_backfaces", o.ignore_backfaces},

@@ -3,6 +3,7 @@
 #include "meso/bake/dilate.hpp"
 #include "meso/bake/tangent_frame.hpp"
 #include "meso/bake/uv_raster.hpp"
+#include "pn_triangle.hpp"
 #include "ray_scene.hpp"
 #include "meso/core/error.hpp"
 #include "meso/core/mesh_arrays.hpp"
@@ -233,6 +234,18 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
       p += w * (Eigen::Vector3d(pv[0], pv[1], pv[2]) - origin);
       n += w * Eigen::Vector3d(nv[0], nv[1], nv[2]);
       t += w * Eigen::Vector3d(tv[0], tv[1], tv[2]);
+    }
+    if (o.basis == BakeBasis::pn) {
+      // The curved PN patch instead of the flat triangle: position and normal.
+      std::array<Eigen::Vector3d, 3> cp, cn;
+      for (int k = 0; k < 3; ++k) {
+        const auto v = low.to_vertex_handle(hs[static_cast<size_t>(k)]);
+        const Vec3f& pv = low.point(v);
+        const Vec3f& nv = low.normal(v);
+        cp[static_cast<size_t>(k)] = Eigen::Vector3d(pv[0], pv[1], pv[2]) - origin;
+        cn[static_cast<size_t>(k)] = Eigen::Vector3d(nv[0], nv[1], nv[2]);
+      }
+      pn_triangle(cp, cn, {s.bary[0], s.bary[1], s.bary[2]}, p, n);
     }
     const double sign = frames[static_cast<size_t>(hs[0].idx())].sign;
     const Eigen::Vector3d b = sign * n.cross(t);

@@ -251,6 +251,37 @@ TEST(Bake, MatchByNamePairsParts) {
   EXPECT_NEAR(partial.displacement.at(6, 4), 0.01f, 1e-6f) << "an unmatched part sees the whole high mesh";
 }
 
+// A coarse sphere base over the true sphere: the flat triangles sit well inside it, the PN
+// patches (built from the radial normals) follow it far more closely.
+TEST(Bake, PnBasisFollowsTheCurvedSurface) {
+  auto sphere = [](int columns, int rows) {
+    Mesh m = test::make_parametric(
+        columns, rows,
+        [](double s, double t) {
+          const double a = 2 * M_PI * s, b = M_PI * (0.15 + 0.7 * t);  // a band, away from the poles
+          return Vec3f(static_cast<float>(std::sin(b) * std::cos(a)), static_cast<float>(std::sin(b) * std::sin(a)), static_cast<float>(std::cos(b)));
+        },
+        true, false);
+    for (auto v : m.vertices()) m.set_normal(v, m.point(v).normalized());
+    return m;
+  };
+  const Mesh base = sphere(12, 4), high = sphere(256, 96);
+  BakeOptions o;
+  o.width = o.height = 64;
+  o.dilate = 0;
+  auto worst = [&](BakeBasis basis) {
+    o.basis = basis;
+    const BakeResult r = bake(base, high, o);
+    float m = 0;
+    for (size_t i = 0; i < r.coverage.texel_count(); ++i)
+      if (r.coverage.pixels[i] == 1.0f) m = std::max(m, std::abs(r.displacement.pixels[i]));
+    return m;
+  };
+  const float linear = worst(BakeBasis::linear), pn = worst(BakeBasis::pn);
+  EXPECT_GT(linear, 0.02f) << "the flat triangles of a 12-sided band are far inside";
+  EXPECT_LT(pn, 0.2f * linear) << "linear " << linear << ", pn " << pn;
+}
+
 TEST(Bake, IdenticalMeshesGiveZeroAndFlatNormals) {
   const Mesh cube = test::make_seamed_cube();
   BakeOptions o;

@@ -26,6 +26,11 @@ enum class HitRule {
 };
 const char* hit_rule_name(HitRule r);
 
+// The base surface rays start from: the flat triangles with interpolated normals, or the
+// curved PN triangle of each (Vlachos et al. 2001) built from the corner positions and
+// normals, for renderers that tessellate the base into that surface.
+enum class BakeBasis { linear, pn };
+
 struct BakeOptions {
   int width = 1024, height = 1024;
   // Ray reach in object units in front of (along +normal) and behind the base surface.
@@ -54,6 +59,7 @@ struct BakeOptions {
   // trailing ".NNN" (Blender's duplicates) and the suffix _low/_lo/_lp resp.
   // _high/_hi/_hp. Base parts without a match see the whole high mesh (and are reported).
   bool match_by_name = false;
+  BakeBasis basis = BakeBasis::linear;
 };
 
 // Whether `cage` can serve as a cage of `base`: same vertex count and the same vertices on
