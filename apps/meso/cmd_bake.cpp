@@ -43,7 +43,8 @@ const std::map<std::string, std::string>& map_files() {
 void add_bake(CLI::App& app, Context& ctx) {
   struct Args {
     std::string low, high, cage, out_dir, size = "1024", front, back, bunch, hit = "nearest";
-    std::string maps = "displacement,normal_ts,coverage", basis = "linear";
+    std::string maps = "displacement,normal_ts,coverage", basis = "linear", detail;
+    float detail_scale = 0.01f;
     float max_miss_rate = 1;
     int dilate = -1, samples = 1;
     bool ignore_backfaces = false, match_by_name = false;
@@ -69,6 +70,11 @@ void add_bake(CLI::App& app, Context& ctx) {
                   "Base surface the rays leave from: linear (flat triangles, interpolated normals) or pn (curved PN triangles "
                   "from the corner normals, for renderers that tessellate into them)")
       ->check(CLI::IsMember({"linear", "pn"}))
+      ->capture_default_str();
+  sub->add_option("--detail", args->detail,
+                  "Detail bump map on the high mesh (its UVs, tiled; mid-grey neutral): adds to the displacement and tilts the normals");
+  sub->add_option("--detail-scale", args->detail_scale, "Object units per unit of the detail map's value")
+      ->check(CLI::Range(-1e6, 1e6) & Finite)
       ->capture_default_str();
   sub->add_option("--hit", args->hit, "Which hit gives a texel its value: nearest, furthest, front-else-nearest, front-only")
       ->check(CLI::IsMember({"nearest", "furthest", "front-else-nearest", "front-only"}))
@@ -100,6 +106,12 @@ void add_bake(CLI::App& app, Context& ctx) {
       o.samples = args->samples;
       o.match_by_name = args->match_by_name;
       o.basis = args->basis == "pn" ? BakeBasis::pn : BakeBasis::linear;
+      Image detail;
+      if (!args->detail.empty()) {
+        detail = read_image(args->detail);
+        o.detail = &detail;
+        o.detail_scale = args->detail_scale;
+      }
       std::vector<std::string> wanted;
       {
         std::stringstream list(args->maps);
@@ -128,6 +140,8 @@ void add_bake(CLI::App& app, Context& ctx) {
         o.cage = &cage;
       }
       const float diagonal = bounding_box(high).diagonal();
+      if (!args->detail.empty() && !has_uvs(high))
+        throw InputError(args->high, "has no texture coordinates; --detail maps a bump onto the high mesh's UVs");
       o.front = parse_length(args->front, diagonal, "--front");
       o.back = parse_length(args->back, diagonal, "--back");
       o.bunch = parse_length(args->bunch, diagonal, "--bunch");
@@ -175,6 +189,7 @@ void add_bake(CLI::App& app, Context& ctx) {
                 {"hit_rule", hit_rule_name(o.hit)},
                 {"cage", args->cage},
                 {"basis", args->basis},
+                {"detail", args->detail},
                 {"matched_parts", r.matched_parts},
                 {"unmatched_parts", r.unmatched_parts},
                 {"ignore_backfaces", o.ignore_backfaces},

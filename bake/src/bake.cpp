@@ -112,17 +112,35 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
   struct Part {
     std::unique_ptr<RayScene> scene;
     std::vector<Vec3f> normals;
+    std::vector<std::array<Vec2f, 3>> uvs;  // per scene triangle, its corners' high-mesh UVs (detail maps)
   };
+  const bool want_uvs = o.detail && !o.detail->empty() && has_uvs(high);
   std::vector<Part> parts;
   std::vector<int> face_part(low.n_faces(), 0);
   auto add_part = [&](const std::vector<bool>* keep) {
     Mesh sub;
     std::vector<Vec3f> normals;
+    std::vector<std::array<Vec2f, 3>> uvs;
+    // The corners' UVs of high face f, in the order of the scene triangle's vertices (which
+    // follow face_halfedges of the face added to the scene).
+    auto corner_uvs = [&](FaceHandle f, const std::array<int, 3>& high_vertex_of_corner) {
+      std::array<Vec2f, 3> out{};
+      for (auto h : face_halfedges(high, f))
+        for (size_t k = 0; k < 3; ++k)
+          if (high.to_vertex_handle(h).idx() == high_vertex_of_corner[k]) out[k] = high.texcoord2D(h);
+      return out;
+    };
     if (!keep) {
       sub = high;
       for (auto v : high.vertices()) normals.push_back(high.normal(v));
+      if (want_uvs)
+        for (auto f : high.faces()) {
+          const auto hs = face_halfedges(high, f);
+          uvs.push_back({high.texcoord2D(hs[0]), high.texcoord2D(hs[1]), high.texcoord2D(hs[2])});
+        }
     } else {
       std::vector<int> map(high.n_vertices(), -1);
+      std::vector<int> back;  // sub vertex -> high vertex
       for (auto f : high.faces()) {
         if (!(*keep)[static_cast<size_t>(f.idx())]) continue;
         std::vector<VertexHandle> vs;
@@ -131,22 +149,32 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
           if (m < 0) {
             m = sub.add_vertex(high.point(v)).idx();
             normals.push_back(high.normal(v));
+            back.push_back(v.idx());
           }
           vs.push_back(VertexHandle(m));
         }
-        if (!sub.add_face(vs).is_valid()) {  // non-manifold within the part: on its own vertices
+        FaceHandle added = sub.add_face(vs);
+        if (!added.is_valid()) {  // non-manifold within the part: on its own vertices
           for (auto& h : vs) {
             const Vec3f q = sub.point(h);
             normals.push_back(normals[static_cast<size_t>(h.idx())]);
+            back.push_back(back[static_cast<size_t>(h.idx())]);
             h = sub.add_vertex(q);
           }
-          sub.add_face(vs);
+          added = sub.add_face(vs);
+        }
+        if (want_uvs) {
+          std::array<int, 3> corner{};
+          const auto hs = face_halfedges(sub, added);
+          for (size_t k = 0; k < 3; ++k) corner[k] = back[static_cast<size_t>(sub.to_vertex_handle(hs[k]).idx())];
+          uvs.push_back(corner_uvs(f, corner));
         }
       }
     }
     Part part;
     part.scene = std::make_unique<RayScene>(sub, origin);
     part.normals = std::move(normals);
+    part.uvs = std::move(uvs);
     parts.push_back(std::move(part));
     return static_cast<int>(parts.size()) - 1;
   };
@@ -329,9 +357,52 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
       if (m.norm() > 0) m.normalize();
       else m = Eigen::Vector3d(0, 0, 1);
     }
-    value.disp = disp;
+    Eigen::Vector3d high_normal = hnd.norm() > 0 ? Eigen::Vector3d(hnd.normalized()) : dir;
+    double detail_height = 0;
+    if (!part.uvs.empty()) {
+      // The detail bump on the high surface (course notes, "Ray-caster"): its height adds to
+      // the distance, its gradient tilts the high normal. UV of the hit on the high mesh, the
+      // bump tiled and bilinear, mid-grey neutral; gradient by central differences of one
+      // texel, carried to 3D with the gradients of u and v over the hit triangle.
+      const auto& cuv = part.uvs[static_cast<size_t>(hit.prim)];
+      const double hu = (1.0 - hit.u - hit.v) * cuv[0][0] + hit.u * cuv[1][0] + hit.v * cuv[2][0];
+      const double hv = (1.0 - hit.u - hit.v) * cuv[0][1] + hit.u * cuv[1][1] + hit.v * cuv[2][1];
+      const Image& bump = *o.detail;
+      auto sample = [&](double u, double v) {
+        const double px = u * bump.width - 0.5, py = (1.0 - v) * bump.height - 0.5;
+        const double x0 = std::floor(px), y0 = std::floor(py), fx = px - x0, fy = py - y0;
+        auto at = [&](double x, double y) {
+          const int ix = static_cast<int>(((static_cast<long long>(x) % bump.width) + bump.width) % bump.width);
+          const int iy = static_cast<int>(((static_cast<long long>(y) % bump.height) + bump.height) % bump.height);
+          return static_cast<double>(bump.at(ix, iy, 0));
+        };
+        return (at(x0, y0) * (1 - fx) + at(x0 + 1, y0) * fx) * (1 - fy) + (at(x0, y0 + 1) * (1 - fx) + at(x0 + 1, y0 + 1) * fx) * fy;
+      };
+      const double du = 1.0 / bump.width, dv = 1.0 / bump.height;
+      detail_height = o.detail_scale * (sample(hu, hv) - 0.5);
+      const double bu = o.detail_scale * (sample(hu + du, hv) - sample(hu - du, hv)) / (2 * du);
+      const double bv = o.detail_scale * (sample(hu, hv + dv) - sample(hu, hv - dv)) / (2 * dv);
+      const Eigen::Vector3d e1 = scene.position(tri[1]) - scene.position(tri[0]), e2 = scene.position(tri[2]) - scene.position(tri[0]);
+      const Eigen::Vector3d fn = e1.cross(e2);
+      if (fn.norm() > 0) {
+        const Eigen::Vector3d un = fn.normalized();
+        const double a1 = e1.dot(e2.cross(un)), a2 = e2.dot(un.cross(e1));
+        if (std::abs(a1) > 0 && std::abs(a2) > 0) {
+          const Eigen::Vector3d g1 = e2.cross(un) / a1, g2 = un.cross(e1) / a2;  // gradients of the barycentrics
+          const Eigen::Vector3d grad_u = (cuv[1][0] - cuv[0][0]) * g1 + (cuv[2][0] - cuv[0][0]) * g2;
+          const Eigen::Vector3d grad_v = (cuv[1][1] - cuv[0][1]) * g1 + (cuv[2][1] - cuv[0][1]) * g2;
+          Eigen::Vector3d tilted = high_normal - (bu * grad_u + bv * grad_v);
+          if (tilted.norm() > 0) high_normal = tilted.normalized();
+        }
+      }
+      if (std::abs(det) > 1e-12) {
+        m = tbn.inverse() * high_normal;
+        m = m.norm() > 0 ? Eigen::Vector3d(m.normalized()) : Eigen::Vector3d(0, 0, 1);
+      }
+    }
+    value.disp = disp + detail_height;
     value.ts = m;
-    value.os = hnd.norm() > 0 ? hnd.normalized() : dir;
+    value.os = high_normal;
     value.ambiguous = unsure;
     return true;
   };

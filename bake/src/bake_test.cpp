@@ -5,6 +5,7 @@
 #include "meso/examples/brick_wall.hpp"
 #include "test_support.hpp"
 
+#include <Eigen/Dense>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -280,6 +281,27 @@ TEST(Bake, PnBasisFollowsTheCurvedSurface) {
   const float linear = worst(BakeBasis::linear), pn = worst(BakeBasis::pn);
   EXPECT_GT(linear, 0.02f) << "the flat triangles of a 12-sided band are far inside";
   EXPECT_LT(pn, 0.2f * linear) << "linear " << linear << ", pn " << pn;
+}
+
+// A detail bump on the high plane (its UVs: u = (x + 0.5) / 2): a sine across u adds
+// S (b - 1/2) to the distance and tilts the normal by its slope.
+TEST(Bake, DetailBumpAddsHeightAndTiltsNormals) {
+  Image bump(64, 1, 1);
+  for (int x = 0; x < 64; ++x) bump.at(x, 0) = static_cast<float>(0.5 + 0.5 * std::sin(2 * M_PI * (x + 0.5) / 64));
+  BakeOptions o;
+  o.width = o.height = 16;
+  o.detail = &bump;
+  o.detail_scale = 0.01f;
+  const BakeResult r = bake(test::make_grid(2, 2), make_plane(0, 0, 0), o);
+  for (int x = 2; x < 14; ++x) {
+    const double u_high = ((x + 0.5) / 16 + 0.5) / 2;
+    const double height = 0.01 * 0.5 * std::sin(2 * M_PI * u_high);
+    const double slope = 0.01 * 0.5 * 2 * M_PI * std::cos(2 * M_PI * u_high) / 2;  // per unit x
+    EXPECT_NEAR(r.displacement.at(x, 8), height, 2e-4) << x;
+    const Eigen::Vector3d n = Eigen::Vector3d(-slope, 0, 1).normalized();
+    EXPECT_NEAR(r.normal_os.at(x, 8, 0), n.x(), 2e-3) << x;
+    EXPECT_NEAR(r.normal_ts.at(x, 8, 0), n.x(), 2e-3) << x << ": the grid's tangent is +x";
+  }
 }
 
 TEST(Bake, IdenticalMeshesGiveZeroAndFlatNormals) {

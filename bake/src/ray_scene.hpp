@@ -97,6 +97,11 @@ class RayScene {
     return ray.tfar < 0;  // Embree marks an occluded ray with tfar = -inf
   }
   const MeshArrays& arrays() const { return arrays_; }
+  // A vertex's position relative to the scene's origin.
+  Eigen::Vector3d position(uint32_t vertex) const {
+    const float* c = &arrays_.positions[3 * static_cast<size_t>(vertex)];
+    return Eigen::Vector3d(c[0], c[1], c[2]);
+  }
   // The triangle's geometric normal, right-handed with its vertex order (unnormalised).
   Eigen::Vector3d face_normal(uint32_t prim) const {
     const uint32_t* t = &arrays_.triangles[3 * static_cast<size_t>(prim)];

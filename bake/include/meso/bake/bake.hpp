@@ -60,6 +60,11 @@ struct BakeOptions {
   // _high/_hi/_hp. Base parts without a match see the whole high mesh (and are reported).
   bool match_by_name = false;
   BakeBasis basis = BakeBasis::linear;
+  // A detail bump on the high mesh (its UVs, tiled, bilinear; channel 0, mid-grey 0.5
+  // neutral): detail_scale * (b - 0.5) object units add to the displacement and its gradient
+  // tilts the high normal, as in the course notes' ray-caster. Needs UVs on the high mesh.
+  const Image* detail = nullptr;
+  float detail_scale = 0.0f;
 };
 
 // Whether `cage` can serve as a cage of `base`: same vertex count and the same vertices on
