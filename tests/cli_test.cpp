@@ -376,6 +376,28 @@ TEST_F(Skeleton, WholePipeline) {
   EXPECT_EQ(missing_maps.code, 3);
   EXPECT_NE(missing_maps.err.find("displacement.exr"), std::string::npos);
   EXPECT_FALSE(fs::exists(d / "x.png"));
+
+  // The measuring instrument: methods against the ray-traced reference, as JSON.
+  const std::string base_maps = "preview " + (d / "reduced.obj").string() + " --maps " + (d / "maps").string() + " --streams " + d.path().string();
+  const Result compare = run(base_maps + " --compare --method pom,cone,sphere-tracing --size 64x48 --view-angle 35 --json --heatmaps " +
+                             (d / "heat").string() + " --reference-edge 1");
+  ASSERT_EQ(compare.code, 0) << compare.err;
+  const auto cmp = nlohmann::json::parse(compare.out);
+  ASSERT_EQ(cmp["methods"].size(), 3u);
+  EXPECT_GT(cmp["reference"]["triangles"].get<size_t>(), reduced.n_faces());
+  for (const auto& m : cmp["methods"]) {
+    for (const char* key : {"name", "wrong_hit_fraction", "rmse", "psnr", "mean_iterations", "p99_iterations", "ms"})
+      EXPECT_TRUE(m.contains(key)) << key;
+    EXPECT_GE(m["wrong_hit_fraction"].get<double>(), 0.0);
+    EXPECT_LE(m["wrong_hit_fraction"].get<double>(), 0.25) << m["name"] << ": an accurate method on a mildly curved base";
+    EXPECT_TRUE(fs::exists(d / "heat" / (m["name"].get<std::string>() + ".png")));
+  }
+  EXPECT_EQ(run(base_maps + " --compare --method pom,nope --size 32x32").code, 2);
+  EXPECT_EQ(run(base_maps + " --heatmaps " + (d / "h2").string() + " --method pom --headless --png " + (d / "y.png").string()).code, 2);
+  EXPECT_EQ(run("preview " + (d / "reduced.obj").string() + " --maps " + (d / "maps").string() + " --compare --method sphere-tracing --size 32x32")
+                .code,
+            3)
+      << "no sdf.exr in the maps folder";
 }
 
 }  // namespace

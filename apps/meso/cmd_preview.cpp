@@ -5,28 +5,90 @@
 #include "meso/formats/image_io.hpp"
 #include "meso/preview/preview.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <sstream>
 
 namespace meso::cli {
 
+namespace {
+
+struct Args {
+  std::string base, maps, streams, png, size = "512x512", shade = "lit", heatmaps;
+  PreviewOptions options;
+  bool headless = false, list = false, compare = false;
+  int repetitions = 5;
+  double uv_tolerance = 1.0, reference_edge = 0.5;
+  size_t reference_triangles = size_t(1) << 25;
+};
+
+// --compare: the reference, every method against it, the heatmaps, the report (and a table on
+// stdout without --json).
+void compare(Context& ctx, const Args& args, const Mesh& base, const PreviewMaps& maps, const PreviewOptions& view,
+             const std::vector<std::string>& methods, const nlohmann::json& base_report, nlohmann::json& report) {
+  CompareOptions co;
+  co.methods = methods;
+  co.view = view;
+  co.repetitions = args.repetitions;
+  co.uv_tolerance_texels = args.uv_tolerance;
+  co.reference.max_edge_texels = args.reference_edge;
+  co.reference.max_triangles = args.reference_triangles;
+  const Comparison c = compare_methods(base, maps, co);
+  OutputSet outputs;
+  std::vector<std::string> written;
+  if (!args.heatmaps.empty()) {
+    // One scale for every method, so the pictures compare.
+    double top = 1;
+    for (const auto& m : c.methods) top = std::max(top, m.max_iterations);
+    for (const auto& m : c.methods) {
+      const std::filesystem::path file = std::filesystem::path(args.heatmaps) / (m.name + ".png");
+      Image heat = fetch_heatmap(m.fetches, top);
+      heat.metadata["method"] = m.name;
+      heat.metadata["iterations"] = view.iterations;
+      write_image(heat, outputs.add(file), PixelFormat::uint8);
+      written.push_back(file.string());
+    }
+  }
+  if (!args.png.empty()) {
+    write_image(c.reference_view, outputs.add(args.png), PixelFormat::uint8);
+    written.push_back(args.png);
+  }
+  outputs.commit();
+  for (const auto& f : written) info(ctx.globals, "wrote " + f);
+  report = nlohmann::json::parse(comparison_json(c));
+  report["command"] = "preview";
+  report["mode"] = "compare";
+  report["base"] = base_report;
+  report["outputs"] = written;
+  if (!ctx.globals.json) {
+    std::printf("reference: %zu triangles (longest UV edge %.3g texels), built in %.0f ms, traced in %.0f ms\n",
+                c.reference_triangles, c.reference_max_edge_texels, c.reference_build_ms, c.reference_ms);
+    std::printf("%-20s %10s %9s %8s %10s %9s %10s\n", "method", "wrong hits", "rmse", "psnr", "mean fetch", "p99 fetch", "ms");
+    for (const auto& m : c.methods)
+      std::printf("%-20s %10.4f %9.5f %8.2f %10.1f %9.0f %10.2f\n", m.name.c_str(), m.wrong_hit_fraction, m.rmse, m.psnr,
+                  m.mean_iterations, m.p99_iterations, m.ms);
+    std::fflush(stdout);
+  }
+}
+
+}  // namespace
+
 void add_preview(CLI::App& app, Context& ctx) {
-  struct Args {
-    std::string base, maps, streams, png, size = "512x512", shade = "lit";
-    PreviewOptions options;
-    bool headless = false, list = false;
-  };
   auto args = std::make_shared<Args>();
   CLI::App* sub = app.add_subcommand("preview", "Render the base mesh with its baked maps (window, or headless to PNG)");
   sub->add_option("base", args->base, "Base mesh with UVs");
   sub->add_option("--maps", args->maps, "Folder written by meso bake (displacement.exr, normal_ts.png)");
   sub->add_option("--streams", args->streams, "Folder of meso streams outputs (sdf.exr for sphere-tracing, cone.exr for cone, relaxed-cone.exr for relaxed-cone); default: the --maps folder");
-  sub->add_option("--method", args->options.method, "Displacement method (see --list-methods)")
-      ->check(CLI::IsMember(preview_methods()));
+  CLI::Option* method_option = sub->add_option(
+      "--method", args->options.method,
+      "Displacement method (see --list-methods); with --compare a comma-separated list or 'all' (the default: every "
+      "method whose stream is in --streams)");
   sub->add_flag("--list-methods", args->list, "Print the method names, one per line, and exit");
   sub->add_flag("--headless", args->headless, "Render off screen (EGL, no display needed) to --png");
-  sub->add_option("--png", args->png, "Output image for --headless (RGBA PNG, 8 bit)");
+  sub->add_option("--png", args->png, "Output image for --headless (RGBA PNG, 8 bit); with --compare, the reference image (in --shade)");
   sub->add_option("--size", args->size, "Image size WxH");
   sub->add_option("--view-angle", args->options.camera.view_angle,
                   "Degrees between the view direction and the mesh's mean normal (0 to 89.9)")
@@ -36,8 +98,24 @@ void add_preview(CLI::App& app, Context& ctx) {
   sub->add_option("--iterations", args->options.iterations, "Main iteration budget of the method")->check(CLI::Range(1, 4096));
   sub->add_option("--shade", args->shade, "lit, uv (visible point's UV in R,G) or height")
       ->check(CLI::IsMember({"lit", "uv", "height"}));
-  sub->callback([&ctx, args] {
-    ctx.run = [&ctx, args](nlohmann::json& report, Progress&) {
+  sub->add_flag("--compare", args->compare,
+                "Measure the methods against a CPU ray-traced reference of the true displaced surface (off screen): wrong "
+                "hits, RMSE/PSNR, texture fetches per pixel, draw time; --png writes the reference image");
+  sub->add_option("--heatmaps", args->heatmaps, "With --compare: write DIR/<method>.png, texture fetches per pixel on a colour ramp");
+  sub->add_option("--repetitions", args->repetitions, "With --compare: timed draws per method (the median is reported)")
+      ->check(CLI::Range(1, 1000));
+  sub->add_option("--uv-tolerance", args->uv_tolerance,
+                  "With --compare: texels between a method's visible point and the reference's beyond which a pixel is a wrong hit")
+      ->check(CLI::PositiveNumber & Finite);
+  sub->add_option("--reference-edge", args->reference_edge,
+                  "With --compare: longest UV edge of the reference's sub-triangles, in texels")
+      ->check(CLI::PositiveNumber & Finite);
+  sub->add_option("--reference-triangles", args->reference_triangles,
+                  "With --compare: cap on the reference's triangle count (coarser sub-triangles beyond it)")
+      ->check(CLI::Range(size_t(1), size_t(1) << 30));
+  sub->callback([&ctx, args, method_option] {
+    const bool method_given = method_option->count() > 0;
+    ctx.run = [&ctx, args, method_given](nlohmann::json& report, Progress&) {
       if (args->list) {
         for (const auto& m : preview_methods()) std::cout << m << '\n';
         report = {{"command", "preview"}, {"methods", preview_methods()}};
@@ -45,7 +123,28 @@ void add_preview(CLI::App& app, Context& ctx) {
       }
       if (args->base.empty()) throw UsageError("preview: give the base mesh");
       if (args->maps.empty()) throw UsageError("preview: give --maps DIR (the folder meso bake wrote)");
-      if (args->headless && args->png.empty()) throw UsageError("preview: --headless needs --png FILE");
+      const auto& known = preview_methods();
+      auto check_known = [&](const std::string& m) {
+        if (std::find(known.begin(), known.end(), m) == known.end())
+          throw UsageError("preview: unknown method '" + m + "' (see --list-methods)");
+      };
+      // --compare: the methods named (all = every method whose stream is there).
+      std::vector<std::string> wanted;
+      const bool all = args->compare && (!method_given || args->options.method == "all");
+      if (args->compare && !all) {
+        std::stringstream list(args->options.method);
+        for (std::string m; std::getline(list, m, ',');) {
+          if (m.empty()) continue;
+          check_known(m);
+          if (std::find(wanted.begin(), wanted.end(), m) == wanted.end()) wanted.push_back(m);
+        }
+        if (wanted.empty()) throw UsageError("preview: --method names no method");
+      }
+      if (!args->compare) {
+        check_known(args->options.method);
+        if (!args->heatmaps.empty()) throw UsageError("preview: --heatmaps needs --compare");
+        if (args->headless && args->png.empty()) throw UsageError("preview: --headless needs --png FILE");
+      }
       PreviewOptions o = args->options;
       parse_size(args->size, o.width, o.height);
       o.shade = args->shade == "uv" ? PreviewShade::uv : args->shade == "height" ? PreviewShade::height : PreviewShade::lit;
@@ -65,20 +164,26 @@ void add_preview(CLI::App& app, Context& ctx) {
         if (stream.empty()) continue;
         const std::filesystem::path file = streams_dir / stream;
         const std::string producer = stream.substr(0, stream.size() - 4);  // "sdf", "cone", "relaxed-cone"
-        const bool needed = o.method == method;
+        const bool needed = args->compare ? std::find(wanted.begin(), wanted.end(), method) != wanted.end() : o.method == method;
+        // Loaded when there: in a window (every method can be switched to), and for --compare all.
+        const bool optional = args->compare ? all : !args->headless;
         if (needed && !std::filesystem::exists(file))
-          throw InputError(file.string(), "missing: method " + o.method + " needs it (meso streams " + producer + " " +
+          throw InputError(file.string(), "missing: method " + method + " needs it (meso streams " + producer + " " +
                                               (dir / "displacement.exr").string() + " -o " + file.string() + ")");
-        if (!needed && (args->headless || !std::filesystem::exists(file))) continue;
+        if (!needed && (!optional || !std::filesystem::exists(file))) continue;
         Image& slot = *stream_for(maps, method);
         try {
           slot = read_image(file);
           check_stream_matches(method, slot, maps.displacement, file.string());
         } catch (const InputError& e) {
           if (needed) throw;
-          warn(ctx.globals, std::string(e.what()) + " (" + method + " unavailable)");  // window only
+          warn(ctx.globals, std::string(e.what()) + " (" + method + " unavailable)");  // window or --compare all
           slot = Image();
         }
+      }
+      if (args->compare) {
+        compare(ctx, *args, base, maps, o, all ? std::vector<std::string>{} : wanted, base_report, report);
+        return 0;
       }
       if (!args->headless) {
         run_window(base, maps, o);

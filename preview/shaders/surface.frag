@@ -45,10 +45,29 @@ const int kConeBisectionSteps = 24;  // relaxed cones: halvings of the step that
 const float kConeFar = 1e30;
 
 layout(location = 0) out vec4 out_color;
+// The measuring instrument's second output (an RG32F attachment when headless; discarded
+// when no draw buffer takes it): R = texture fetches the method made to find the visible
+// point, G = 1 on the mesh (the clear leaves 0 on the background).
+layout(location = 1) out vec2 out_fetches;
+
+// Fetch counter: every lookup of the height map, of a stream (cone texel, distance field
+// voxel) and of the normal map where a method searches with it (slope, iterative parallax)
+// adds one, a filtered lookup (4 texels blended by the sampler) as much as a texelFetch. The
+// shading's own lookups at the visible point are not counted.
+int g_fetches = 0;
 
 // Explicit level of detail: loops have no implicit derivatives (divergent control flow).
-float height_at(vec2 uv) { return textureLod(u_height, uv, 0.0).r; }
+float height_lookup(vec2 uv) { return textureLod(u_height, uv, 0.0).r; }
 vec3 normal_ts_at(vec2 uv) { return textureLod(u_normal, uv, 0.0).rgb * 2.0 - 1.0; }
+// The counted lookups of the searches.
+float height_at(vec2 uv) {
+  ++g_fetches;
+  return height_lookup(uv);
+}
+vec3 normal_search_at(vec2 uv) {
+  ++g_fetches;
+  return normal_ts_at(uv);
+}
 
 // ---- Cone stepping (streams/cone_map.hpp; the algorithm of trace_cone_map and
 // intersect_footprint in streams/src/cone_map.cpp). Pixel units as the streams use them:
@@ -66,6 +85,7 @@ vec3 cone_texel(ivec2 p) {
   ivec2 n = textureSize(u_cone, 0);
   if (u_cone_wrap != 0) p = ivec2(cone_wrap_index(p.x, n.x), cone_wrap_index(p.y, n.y));
   else p = clamp(p, ivec2(0), n - 1);
+  ++g_fetches;
   return texelFetch(u_cone, ivec2(p.x, n.y - 1 - p.y), 0).rgb;  // GL rows are bottom first
 }
 
@@ -279,12 +299,12 @@ void main() {
     uv = v_uv + height_at(v_uv) * to_eye_uvh.xy;
   } else if (u_method == kSlope && facing) {
     // Section 4.1.4: the plane through (u, v, h) with the normal-map normal, offset-limited.
-    uv = v_uv + height_at(v_uv) * normal_ts_at(v_uv).z * to_eye_uvh.xy;
+    uv = v_uv + height_at(v_uv) * normal_search_at(v_uv).z * to_eye_uvh.xy;
   } else if (u_method == kIterativeParallax && facing) {
     // Section 4.2.1: repeat the slope step from the point reached on the ray.
     vec3 uvh = vec3(v_uv, 0.0);
     for (int i = 0; i < max(u_iterations, 1); ++i) {
-      uvh += (height_at(uvh.xy) - uvh.z) * normal_ts_at(uvh.xy).z * to_eye_uvh;
+      uvh += (height_at(uvh.xy) - uvh.z) * normal_search_at(uvh.xy).z * to_eye_uvh;
     }
     uv = uvh.xy;
   } else if ((u_method == kSteep || u_method == kRelief || u_method == kPom) && facing) {
@@ -339,36 +359,44 @@ void main() {
     // only at centres: with the 1-Lipschitz bound d(q) >= d(v) - |q - v| the blend can exceed
     // the true distance by at most one voxel diagonal (u_sdf_margin), so that much is held back.
     float s = (u_sdf_bias + u_sdf_scale) / dir.z;  // where the ray enters the top (h = bias + scale)
+    // The field measures the distance to S', boxes as high as the highest point over their
+    // texel, which can float above the surface: where it allows no step (within a margin of
+    // S'), march a quarter margin at a time watching the true surface, resuming sphere steps
+    // where the field opens up again, and finish with a secant step at the crossing (a
+    // combined method, section 4.4). Every pass of the loop counts against the budget.
+    float ds = 0.25 * u_sdf_margin / len;
+    bool marching = false;  // the previous pass was a march step from s_prev, d_prev above the surface
+    float s_prev = s, d_prev = 0.0;
     for (int i = 0; i < max(u_iterations, 1); ++i) {
       vec2 p = v_uv + dir.xy * s;
       float z = (dir.z * s - u_sdf_bias) / span;  // normalised height
-      if (z < 0.0) break;
+      ++g_fetches;
       float step = textureLod(u_sdf, vec3(p, clamp(z, 0.0, 1.0)), 0.0).r - u_sdf_margin;
-      if (step < u_sdf_epsilon) break;
-      s += step / len;
-    }
-    // Within a margin of the surface: finish as a combined method (section 4.4) with a short
-    // linear search at a quarter margin per step, then one secant step.
-    float ds = 0.25 * u_sdf_margin / len;
-    float d_prev = dir.z * s - height_at(v_uv + dir.xy * s);
-    for (int i = 0; i < 12 && d_prev > 0.0; ++i) {
-      float d = dir.z * (s + ds) - height_at(v_uv + dir.xy * (s + ds));
+      if (step >= u_sdf_epsilon && z >= 0.0) {
+        s += step / len;
+        marching = false;
+        continue;
+      }
+      float d = dir.z * s - height_at(p);  // ray height minus surface height
       if (d <= 0.0) {
-        s += ds * clamp(d_prev / max(d_prev - d, 1e-20), 0.0, 1.0);
+        if (marching) s = s_prev + (s - s_prev) * clamp(d_prev / max(d_prev - d, 1e-20), 0.0, 1.0);
         break;
       }
-      s += ds;
+      marching = true;
+      s_prev = s;
       d_prev = d;
+      s += ds;
     }
     uv = v_uv + dir.xy * s;
   }
 
+  out_fetches = vec2(float(g_fetches), 1.0);
   if (u_shade == 1) {
     out_color = vec4(uv, 0.0, 1.0);
     return;
   }
   if (u_shade == 2) {
-    out_color = vec4(height_at(uv), 0.0, 0.0, 1.0);
+    out_color = vec4(height_lookup(uv), 0.0, 0.0, 1.0);
     return;
   }
   // MikkTSpace decoding with the interpolated, unnormalised vectors (tangent_frame.hpp).

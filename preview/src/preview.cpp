@@ -9,9 +9,12 @@
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <memory>
 #include <string>
+#include <vector>
 
 namespace meso {
 
@@ -64,60 +67,124 @@ class EglContext {
   EGLContext context_ = EGL_NO_CONTEXT;
 };
 
-// A float RGBA colour target with depth, bound while alive.
+// Float colour targets with depth, bound while alive: attachment 0 RGBA (the image),
+// attachment 1 RG (the fetch counts, surface.frag's out_fetches).
 class OffscreenTarget {
  public:
-  OffscreenTarget(int w, int h) {
+  OffscreenTarget(int w, int h) : width_(w), height_(h) {
     glGenFramebuffers(1, &fbo_);
     glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
-    glGenRenderbuffers(2, rb_);
+    glGenRenderbuffers(3, rb_);
     glBindRenderbuffer(GL_RENDERBUFFER, rb_[0]);
     glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA32F, w, h);
     glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, rb_[0]);
+    glBindRenderbuffer(GL_RENDERBUFFER, rb_[2]);
+    glRenderbufferStorage(GL_RENDERBUFFER, GL_RG32F, w, h);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_RENDERBUFFER, rb_[2]);
     glBindRenderbuffer(GL_RENDERBUFFER, rb_[1]);
     glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT32F, w, h);
     glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, rb_[1]);
+    const GLenum buffers[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+    glDrawBuffers(2, buffers);
     if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
       throw InternalError("OpenGL: float framebuffer is not supported");
   }
   ~OffscreenTarget() {
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
-    glDeleteRenderbuffers(2, rb_);
+    glDeleteRenderbuffers(3, rb_);
     glDeleteFramebuffers(1, &fbo_);
   }
   OffscreenTarget(const OffscreenTarget&) = delete;
   OffscreenTarget& operator=(const OffscreenTarget&) = delete;
+  int width() const { return width_; }
+  int height() const { return height_; }
+
+  // Colour attachment `index` as an Image of `channels` floats, rows from the top.
+  Image read(int index, int channels) const {
+    Image out(width_, height_, channels);
+    std::vector<float> px(out.pixels.size());
+    glReadBuffer(index == 0 ? GL_COLOR_ATTACHMENT0 : GL_COLOR_ATTACHMENT1);
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    glReadPixels(0, 0, width_, height_, channels == 4 ? GL_RGBA : GL_RG, GL_FLOAT, px.data());
+    glReadBuffer(GL_COLOR_ATTACHMENT0);
+    // OpenGL's first row is the bottom one; Image's is the top one.
+    const size_t row = static_cast<size_t>(width_) * static_cast<size_t>(channels);
+    for (int y = 0; y < height_; ++y)
+      std::copy_n(px.data() + static_cast<size_t>(height_ - 1 - y) * row, row, out.pixels.data() + static_cast<size_t>(y) * row);
+    return out;
+  }
 
  private:
-  GLuint fbo_ = 0, rb_[2] = {0, 0};
+  int width_ = 0, height_ = 0;
+  GLuint fbo_ = 0, rb_[3] = {0, 0, 0};
 };
 
 }  // namespace
 
-Image render_headless(const Mesh& base, const PreviewMaps& maps, const PreviewOptions& o) {
-  check_maps(maps, o.method);
+struct HeadlessPreview::Impl {
+  // Declaration order is construction order: the context first, destroyed last.
+  const PreviewMaps& maps;
   EglContext context;
-  if (epoxy_gl_version() < 45) throw InternalError("OpenGL 4.5 is not available (got " + std::to_string(epoxy_gl_version()) + ")");
-  Image out(o.width, o.height, 4);
-  {
-    OffscreenTarget target(o.width, o.height);
-    SurfaceRenderer renderer(base, maps);
-    renderer.draw(o, o.width, o.height);
-    glFinish();
-    std::vector<float> px(out.pixels.size());
-    glPixelStorei(GL_PACK_ALIGNMENT, 1);
-    glReadPixels(0, 0, o.width, o.height, GL_RGBA, GL_FLOAT, px.data());
-    // OpenGL's first row is the bottom one; Image's is the top one.
-    const size_t row = static_cast<size_t>(o.width) * 4;
-    for (int y = 0; y < o.height; ++y)
-      std::copy_n(px.data() + static_cast<size_t>(o.height - 1 - y) * row, row, out.pixels.data() + static_cast<size_t>(y) * row);
-    if (glGetError() != GL_NO_ERROR) throw InternalError("OpenGL reported an error while rendering");
+  std::unique_ptr<SurfaceRenderer> renderer;
+  std::unique_ptr<OffscreenTarget> target;
+
+  Impl(const Mesh& base, const PreviewMaps& m) : maps(m) {
+    if (maps.displacement.empty() || maps.normal_ts.empty()) throw std::logic_error("preview: maps are empty");
+    if (epoxy_gl_version() < 45) throw InternalError("OpenGL 4.5 is not available (got " + std::to_string(epoxy_gl_version()) + ")");
+    renderer = std::make_unique<SurfaceRenderer>(base, maps);
   }
+  ~Impl() {
+    target.reset();
+    renderer.reset();
+  }
+  // Binds a target of the options' size, drawn into.
+  void draw(const PreviewOptions& o) {
+    check_maps(maps, o.method);
+    if (!target || target->width() != o.width || target->height() != o.height) {
+      target.reset();
+      target = std::make_unique<OffscreenTarget>(o.width, o.height);
+    }
+    renderer->draw(o, o.width, o.height);
+  }
+};
+
+HeadlessPreview::HeadlessPreview(const Mesh& base, const PreviewMaps& maps) : impl_(std::make_unique<Impl>(base, maps)) {}
+
+HeadlessPreview::~HeadlessPreview() = default;
+
+Image HeadlessPreview::render(const PreviewOptions& o, Image* fetches) {
+  impl_->draw(o);
+  glFinish();
+  Image out = impl_->target->read(0, 4);
+  if (fetches) *fetches = impl_->target->read(1, 2);
+  if (glGetError() != GL_NO_ERROR) throw InternalError("OpenGL reported an error while rendering");
   out.metadata["method"] = o.method;
   out.metadata["iterations"] = o.iterations;
   out.metadata["view_angle"] = o.camera.view_angle;
   out.metadata["azimuth"] = o.camera.azimuth;
   return out;
+}
+
+double HeadlessPreview::time_draw(const PreviewOptions& o, int repetitions) {
+  impl_->draw(o);  // warm-up: shader variants are compiled on first use
+  glFinish();
+  std::vector<double> ms;
+  for (int r = 0; r < std::max(repetitions, 1); ++r) {
+    const auto t0 = std::chrono::steady_clock::now();
+    impl_->draw(o);
+    glFinish();
+    ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  }
+  if (glGetError() != GL_NO_ERROR) throw InternalError("OpenGL reported an error while rendering");
+  std::sort(ms.begin(), ms.end());
+  const size_t n = ms.size();
+  return n % 2 ? ms[n / 2] : 0.5 * (ms[n / 2 - 1] + ms[n / 2]);
+}
+
+Image render_headless(const Mesh& base, const PreviewMaps& maps, const PreviewOptions& o) {
+  check_maps(maps, o.method);  // usage errors before any OpenGL work
+  HeadlessPreview preview(base, maps);
+  return preview.render(o);
 }
 
 namespace {

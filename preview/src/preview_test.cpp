@@ -9,6 +9,8 @@
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <tbb/global_control.h>
 
 #include <algorithm>
 #include <array>
@@ -418,6 +420,292 @@ TEST(Preview, UnknownMethodIsAUsageError) {
   PreviewOptions o;
   o.method = "no-such-method";
   EXPECT_THROW(render_headless(quad, maps, o), UsageError);
+}
+
+// ---- the measuring instrument ----
+
+// The view ray through pixel (x, y) (rows from the top) rebuilt from the OpenGL matrix alone:
+// origin on the near plane, unit direction.
+struct ViewRay {
+  std::array<double, 3> o, d;
+};
+ViewRay view_ray(const std::array<double, 16>& inv, int x, int y, int width, int height) {
+  auto unproject = [&](double nx, double ny, double nz) {
+    std::array<double, 4> p{};
+    for (int r = 0; r < 4; ++r)
+      p[static_cast<size_t>(r)] = inv[static_cast<size_t>(r)] * nx + inv[static_cast<size_t>(4 + r)] * ny +
+                                  inv[static_cast<size_t>(8 + r)] * nz + inv[static_cast<size_t>(12 + r)];
+    return std::array<double, 3>{p[0] / p[3], p[1] / p[3], p[2] / p[3]};
+  };
+  const double nx = 2.0 * (x + 0.5) / width - 1.0, ny = 1.0 - 2.0 * (y + 0.5) / height;
+  const auto p0 = unproject(nx, ny, -1.0), p1 = unproject(nx, ny, 1.0);
+  std::array<double, 3> v{p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
+  const double len = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+  for (double& c : v) c /= len;
+  return {p0, v};
+}
+
+// The analytic check of the reference: through every pixel of a view of the unit quad
+// (UV = xy, normal +z), the ray rebuilt from the OpenGL matrix meets the displaced plane
+// z = h(x) where the reference says, for a flat and for a linear displacement.
+TEST(Measure, ReferenceSeesPlanesWhereTheRaysMeetThem) {
+  const Mesh quad = test::make_grid(1, 1);
+  struct Case {
+    const char* name;
+    float (*height)(float u);
+    double k, c;  // h = k u + c
+  };
+  for (const Case& test_case : {Case{"flat", [](float) { return 0.05f; }, 0.0, 0.05}, Case{"ramp", [](float u) { return 0.1f * u; }, 0.1, 0.0}}) {
+    const PreviewMaps maps = maps_with_height(test_case.height);
+    for (float angle : {0.0f, 35.0f, 65.0f}) {
+      PreviewOptions o;
+      o.width = 64;
+      o.height = 48;  // not square: the aspect ratio must match the GPU's too
+      o.camera.view_angle = angle;
+      o.camera.azimuth = 20.0f;
+      const ReferenceRenderer reference(quad, maps);
+      o.shade = PreviewShade::uv;
+      const Image uv = reference.render(o);
+      o.shade = PreviewShade::height;
+      const Image height = reference.render(o);
+      o.shade = PreviewShade::lit;
+      const Image lit = reference.render(o);
+      ASSERT_EQ(uv.width, 64);
+      ASSERT_EQ(uv.height, 48);
+      const std::array<double, 16> inv = inverse(frame_camera(quad, o.camera, 64.0f / 48.0f).view_projection);
+      size_t inside = 0, checked = 0;
+      double worst = 0;
+      for (int y = 0; y < o.height; ++y)
+        for (int x = 0; x < o.width; ++x) {
+          const ViewRay r = view_ray(inv, x, y, o.width, o.height);
+          // z0 + s dz = k (x0 + s dx) + c; the ramp is linear between the outer texel centres.
+          const double s = (test_case.k * r.o[0] + test_case.c - r.o[2]) / (r.d[2] - test_case.k * r.d[0]);
+          const double px = r.o[0] + s * r.d[0], py = r.o[1] + s * r.d[1];
+          const double lo = test_case.k != 0 ? 1.0 / 64 : 0.002;
+          const bool in = px > lo && px < 1 - lo && py > 0.002 && py < 0.998;
+          const bool out = px < -0.002 || px > 1.002 || py < -0.002 || py > 1.002;
+          if (out) {
+            EXPECT_EQ(uv.at(x, y, 3), 0.0f) << test_case.name << " pixel " << x << "," << y;
+          }
+          if (!in) continue;
+          ++inside;
+          ASSERT_EQ(uv.at(x, y, 3), 1.0f) << test_case.name << " pixel " << x << "," << y;
+          worst = std::max({worst, std::abs(uv.at(x, y, 0) - px), std::abs(uv.at(x, y, 1) - py)});
+          EXPECT_NEAR(height.at(x, y, 0), test_case.k * px + test_case.c, 1e-5) << test_case.name;
+          if (test_case.k == 0) {
+            // A flat normal map: the Lambert constant of LitFlatSurfaceMatchesLambert.
+            const double ndotl = 1.0 / std::sqrt(0.16 + 0.36 + 1.0), albedo[3] = {0.78, 0.74, 0.70};
+            for (int c = 0; c < 3; ++c) EXPECT_NEAR(lit.at(x, y, c), std::pow(albedo[c] * (0.12 + 0.88 * ndotl), 1 / 2.2), 1e-5);
+          }
+          ++checked;
+        }
+      std::printf("%s at %.0f deg: %zu pixels, visible points within %.2g of the analytic ones\n", test_case.name,
+                  static_cast<double>(angle), checked, worst);
+      EXPECT_GT(inside, 64u * 48u / 10) << test_case.name;
+      EXPECT_LT(worst, 2e-5) << test_case.name << " at " << angle;
+    }
+  }
+}
+
+// A rough map over a flat base whose triangles differ in size, so that neighbours are cut to
+// different depths: every ray that enters and leaves the height slab over the inside of the
+// base must hit (a crack would let it through), and the image does not depend on the number
+// of threads.
+TEST(Measure, ReferenceIsWatertightAndDeterministic) {
+  const Mesh sheet = test::make_parametric(9, 7, [](double s, double t) {
+    return Vec3f(static_cast<float>(0.4 * s + 0.6 * s * s), static_cast<float>(t * t * 0.5 + 0.5 * t), 0.0f);
+  }, false, false);
+  const PreviewMaps maps = cone_maps(ConeScene::rough, Border::clamp);
+  const auto [lo, hi] = std::minmax_element(maps.displacement.pixels.begin(), maps.displacement.pixels.end());
+  const double side = sheet.normal(VertexHandle(0))[2] > 0 ? 1.0 : -1.0;  // displacement along +z or -z
+  const double z_a = side * static_cast<double>(*lo), z_b = side * static_cast<double>(*hi);
+  for (float angle : {0.0f, 50.0f}) {
+    PreviewOptions o;
+    o.width = o.height = 80;
+    o.camera.view_angle = angle;
+    o.camera.azimuth = 25.0f;
+    o.shade = PreviewShade::uv;
+    const ReferenceRenderer reference(sheet, maps);
+    EXPECT_LE(reference.max_edge_texels(), 0.5);
+    const Image img = reference.render(o);
+    const std::array<double, 16> inv = inverse(frame_camera(sheet, o.camera, 1.0f).view_projection);
+    size_t must_hit = 0;
+    for (int y = 0; y < o.height; ++y)
+      for (int x = 0; x < o.width; ++x) {
+        const ViewRay r = view_ray(inv, x, y, o.width, o.height);
+        bool inside = true;
+        for (double z : {z_a, z_b}) {
+          const double s = (z - r.o[2]) / r.d[2];
+          const double px = r.o[0] + s * r.d[0], py = r.o[1] + s * r.d[1];
+          inside = inside && px > 0.01 && px < 0.99 && py > 0.01 && py < 0.99;
+        }
+        if (!inside) continue;
+        ++must_hit;
+        EXPECT_EQ(img.at(x, y, 3), 1.0f) << "a crack at pixel " << x << "," << y << ", " << angle << " degrees";
+      }
+    EXPECT_GT(must_hit, 80u * 80u / 5);
+    Image single;
+    {
+      tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+      single = ReferenceRenderer(sheet, maps).render(o);
+    }
+    EXPECT_EQ(single.pixels, img.pixels) << "the reference depends on the thread count";
+  }
+}
+
+PreviewMaps rough_maps_with_sdf() {
+  PreviewMaps maps = cone_maps(ConeScene::rough, Border::clamp);
+  const HeightField field = make_height_field(maps.displacement, Border::clamp);
+  maps.sdf = distance_field_image(build_distance_field(field, DistanceFieldOptions{}), field);
+  return maps;
+}
+
+// The search methods with generous budgets find the reference's visible points: at moderate
+// angles, zoomed in so that the quad's border (where the displaced sheet outgrows the base
+// mesh's silhouette, which no per-pixel method can draw) stays out of the frame.
+TEST(Measure, SearchMethodsAgreeWithTheReference) {
+  const Mesh quad = test::make_grid(1, 1);
+  const PreviewMaps maps = rough_maps_with_sdf();
+  for (float angle : {30.0f, 45.0f}) {
+    CompareOptions o;
+    o.methods = {"parallax", "relief", "pom", "cone", "relaxed-cone", "sphere-tracing"};
+    o.view.width = o.view.height = 96;
+    o.view.camera.view_angle = angle;
+    o.view.camera.azimuth = 35.0f;
+    o.view.camera.zoom = angle > 40 ? 5.0f : 3.0f;
+    o.view.iterations = 256;
+    o.repetitions = 1;
+    const Comparison c = compare_methods(quad, maps, o);
+    ASSERT_EQ(c.methods.size(), o.methods.size());
+    EXPECT_GT(c.reference_triangles, 0u);
+    EXPECT_LE(c.reference_max_edge_texels, 0.5);
+    for (const MethodComparison& m : c.methods) {
+      std::printf("%.0f deg %-15s wrong hits %.4f (%zu of %zu), rmse %.4f, fetches mean %.1f p99 %.0f, %.2f ms\n",
+                  static_cast<double>(angle), m.name.c_str(), m.wrong_hit_fraction, m.wrong_hits, m.pixels, m.rmse,
+                  m.mean_iterations, m.p99_iterations, m.ms);
+      EXPECT_GT(m.pixels, 96u * 96u / 2) << m.name;
+      EXPECT_TRUE(std::isfinite(m.ms) && m.ms > 0) << m.name;
+      EXPECT_EQ(m.fetches.width, 96);
+      EXPECT_EQ(m.fetches.channels, 2);
+      EXPECT_GE(m.mean_iterations, 1.0) << m.name;
+      EXPECT_GE(m.p99_iterations, m.mean_iterations) << m.name;
+      EXPECT_GE(m.max_iterations, m.p99_iterations) << m.name;
+      if (m.name == "parallax") {
+        // The instrument tells methods apart: one parallax step misses most bumps.
+        EXPECT_GT(m.wrong_hit_fraction, 0.03) << "at " << angle;
+        continue;
+      }
+      EXPECT_LE(m.wrong_hit_fraction, 0.002) << m.name << " at " << angle;
+      EXPECT_LT(m.rmse, 0.01) << m.name;  // the normal map is flat: lit images differ only where coverage does
+    }
+  }
+}
+
+// Fetch counts are exact for the fixed-step methods; linear searches fetch more with a larger
+// budget; the methods that stop when they have found the surface do not.
+TEST(Measure, FetchCounts) {
+  const Mesh quad = test::make_grid(1, 1);
+  {
+    const PreviewMaps maps = maps_with_height([](float) { return 0.05f; });
+    HeadlessPreview gpu(quad, maps);
+    for (const auto& [method, expect] : {std::pair<const char*, float>{"bump", 0.0f}, {"parallax", 1.0f}, {"offset-limited", 1.0f},
+                                         {"slope", 2.0f}, {"iterative-parallax", 14.0f}}) {
+      PreviewOptions o = centre_uv_options(method, 30.0f);
+      o.iterations = 7;
+      Image fetches;
+      const Image img = gpu.render(o, &fetches);
+      ASSERT_EQ(fetches.channels, 2);
+      size_t covered = 0;
+      for (size_t i = 0; i < img.texel_count(); ++i) {
+        const bool on = img.pixels[4 * i + 3] > 0.5f;
+        covered += on;
+        ASSERT_EQ(fetches.pixels[2 * i + 1], on ? 1.0f : 0.0f) << method;
+        ASSERT_EQ(fetches.pixels[2 * i], on ? expect : 0.0f) << method << " pixel " << i;
+      }
+      EXPECT_GT(covered, img.texel_count() / 4);
+    }
+  }
+  const PreviewMaps maps = rough_maps_with_sdf();
+  HeadlessPreview gpu(quad, maps);
+  auto mean_fetches = [&](const std::string& method, int iterations, Image* out = nullptr) {
+    Image fetches;
+    gpu.render(view_options(method, 45.0f, 35.0f, iterations, PreviewShade::uv), &fetches);
+    double sum = 0;
+    size_t n = 0;
+    for (size_t i = 0; i < fetches.texel_count(); ++i)
+      if (fetches.pixels[2 * i + 1] > 0.5f) {
+        EXPECT_TRUE(std::isfinite(fetches.pixels[2 * i]) && fetches.pixels[2 * i] >= 1.0f) << method;
+        sum += fetches.pixels[2 * i];
+        ++n;
+      }
+    if (out) *out = fetches;
+    return n ? sum / static_cast<double>(n) : 0.0;
+  };
+  for (const char* method : {"steep", "pom", "relief", "iterative-parallax"}) {
+    const double a = mean_fetches(method, 8), b = mean_fetches(method, 32), c = mean_fetches(method, 128);
+    std::printf("%s: mean fetches %.1f, %.1f, %.1f at 8, 32, 128 steps\n", method, a, b, c);
+    EXPECT_LT(a, b) << method;
+    EXPECT_LT(b, c) << method;
+  }
+  // Relief is POM plus its 8 halvings wherever the linear search found a crossing.
+  Image pom, relief;
+  mean_fetches("pom", 32, &pom);
+  mean_fetches("relief", 32, &relief);
+  for (size_t i = 0; i < pom.texel_count(); ++i) {
+    const float d = relief.pixels[2 * i] - pom.pixels[2 * i];
+    ASSERT_TRUE(d == 0.0f || d == 8.0f) << d;
+  }
+  const double pom_1024 = mean_fetches("pom", 1024);
+  for (const char* method : {"cone", "relaxed-cone", "sphere-tracing"}) {
+    const double a = mean_fetches(method, 256), b = mean_fetches(method, 1024);
+    std::printf("%s: mean fetches %.1f at 256 and %.1f at 1024 passes (pom at 1024 steps: %.1f)\n", method, a, b, pom_1024);
+    EXPECT_EQ(a, b) << method << " stops when it has found the surface";
+    EXPECT_LT(b, pom_1024 / 4) << method;
+  }
+}
+
+TEST(Measure, ComparisonReport) {
+  const Mesh quad = test::make_grid(1, 1);
+  PreviewMaps maps = maps_with_height([](float u) { return 0.1f * u; });
+  CompareOptions o;
+  o.view.width = 40;
+  o.view.height = 32;
+  o.repetitions = 3;
+  // Without --method: every method whose stream is there (none is: the eight without one).
+  Comparison c = compare_methods(quad, maps, o);
+  ASSERT_EQ(c.methods.size(), 8u);
+  EXPECT_EQ(c.methods.front().name, "bump");
+  EXPECT_EQ(c.methods.back().name, "pom");
+  const auto json = nlohmann::json::parse(comparison_json(c));
+  for (const char* key : {"triangles", "ms", "max_edge_texels", "build_ms"}) EXPECT_TRUE(json["reference"].contains(key)) << key;
+  EXPECT_EQ(json["reference"]["triangles"].get<size_t>(), c.reference_triangles);
+  for (const char* key : {"width", "height", "view_angle", "azimuth", "zoom", "iterations", "uv_tolerance_texels"})
+    EXPECT_TRUE(json.contains(key)) << key;
+  ASSERT_EQ(json["methods"].size(), 8u);
+  for (size_t i = 0; i < 8; ++i) {
+    const auto& m = json["methods"][i];
+    for (const char* key : {"name", "pixels", "wrong_hit_fraction", "rmse", "psnr", "mean_iterations", "p99_iterations", "max_iterations", "ms"})
+      EXPECT_TRUE(m.contains(key)) << key;
+    EXPECT_EQ(m["name"].get<std::string>(), c.methods[i].name);
+    EXPECT_NEAR(m["wrong_hit_fraction"].get<double>(), c.methods[i].wrong_hit_fraction, 1e-8);
+    EXPECT_EQ(m["pixels"].get<size_t>(), c.methods[i].pixels);
+    EXPECT_EQ(m["psnr"].is_null(), c.methods[i].rmse == 0.0);
+  }
+  o.methods = {"pom", "no-such-method"};
+  EXPECT_THROW(compare_methods(quad, maps, o), UsageError);
+  o.methods = {"sphere-tracing"};
+  EXPECT_THROW(compare_methods(quad, maps, o), UsageError) << "no distance field loaded";
+
+  // The heatmap's ramp: dark blue at 0, yellow at the top, transparent off the mesh.
+  Image fetches(3, 1, 2);
+  fetches.pixels = {0.0f, 1.0f, 100.0f, 1.0f, 7.0f, 0.0f};
+  const Image heat = fetch_heatmap(fetches, 100.0);
+  EXPECT_NEAR(heat.at(0, 0, 0), 68 / 255.0, 1e-6);
+  EXPECT_NEAR(heat.at(0, 0, 2), 84 / 255.0, 1e-6);
+  EXPECT_NEAR(heat.at(1, 0, 0), 253 / 255.0, 1e-6);
+  EXPECT_NEAR(heat.at(1, 0, 1), 231 / 255.0, 1e-6);
+  EXPECT_EQ(heat.at(1, 0, 3), 1.0f);
+  EXPECT_EQ(heat.at(2, 0, 3), 0.0f);
 }
 
 }  // namespace

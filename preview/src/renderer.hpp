@@ -2,6 +2,7 @@
 // OpenGL 4.5 core context (function pointers through libepoxy).
 #pragma once
 
+#include "camera.hpp"
 #include "meso/preview/preview.hpp"
 
 #include <epoxy/gl.h>
@@ -9,14 +10,6 @@
 #include <array>
 
 namespace meso {
-
-// Camera placement derived from the mesh (mean normal, bounding sphere) and PreviewCamera.
-struct CameraPose {
-  std::array<float, 16> view_projection;  // column-major
-  Vec3f eye;
-  Vec3f light;  // unit, toward the light, fixed relative to the mesh
-};
-CameraPose frame_camera(const Mesh& base, const PreviewCamera& camera, float aspect);
 
 class SurfaceRenderer {
  public:

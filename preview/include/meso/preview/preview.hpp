@@ -5,6 +5,8 @@
 #include "meso/core/image.hpp"
 #include "meso/core/mesh.hpp"
 
+#include <cstddef>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -64,7 +66,9 @@ struct PreviewOptions {
   std::string method = "pom";
   int width = 512, height = 512;
   PreviewCamera camera;
-  int iterations = 32;  // the method's main iteration budget (POM: linear-search steps; cone methods: loop passes)
+  // The method's main iteration budget (POM: linear-search steps; cone methods: loop passes;
+  // sphere tracing: loop passes, sphere steps and the fine march near the surface alike).
+  int iterations = 32;
   PreviewShade shade = PreviewShade::lit;
 };
 
@@ -75,6 +79,155 @@ const std::vector<std::string>& preview_methods();
 // the mesh and 0 on the background. Throws UsageError for an unknown method and
 // InternalError when no OpenGL 4.5 context can be had.
 Image render_headless(const Mesh& base, const PreviewMaps& maps, const PreviewOptions& options);
+
+// An off-screen OpenGL 4.5 context (EGL) with the mesh and maps uploaded once, for rendering
+// many frames of the same scene (render_headless makes one and renders once). `base` and
+// `maps` must outlive it. Throws InternalError when no OpenGL 4.5 context can be had.
+class HeadlessPreview {
+ public:
+  HeadlessPreview(const Mesh& base, const PreviewMaps& maps);
+  ~HeadlessPreview();
+  HeadlessPreview(const HeadlessPreview&) = delete;
+  HeadlessPreview& operator=(const HeadlessPreview&) = delete;
+
+  // One frame, as render_headless. With `fetches`, also the method's work per pixel: 2
+  // channels, R = texture fetches the shader made to find the visible point (every lookup of
+  // the height map and of the method's stream, and of the normal map where slope and
+  // iterative parallax search with it; a filtered lookup counts one like a texelFetch; the
+  // shading's own lookups are not counted), G = 1 on the mesh, 0 on the background.
+  // Throws UsageError for an unknown method or one whose stream is not in the maps.
+  Image render(const PreviewOptions& options, Image* fetches = nullptr);
+
+  // Wall time of one draw of `options` (clear, draw, glFinish) measured on the CPU clock, in
+  // milliseconds: the median of `repetitions` draws after one unmeasured warm-up draw (Mesa
+  // compiles shader variants on first use).
+  double time_draw(const PreviewOptions& options, int repetitions = 5);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// ---- The measuring instrument: a CPU reference of the true displaced surface ----
+
+struct ReferenceOptions {
+  // Each base triangle is cut by longest-edge bisection, edges measured in texels of the
+  // displacement map (u W, v H), until no sub-triangle edge is longer than this.
+  double max_edge_texels = 0.5;
+  // Cap on the total sub-triangle count. While the mesh would need more, max_edge_texels
+  // doubles (up to 8 times), then the bisection depth is limited; max_edge_texels() reports
+  // what was reached. Memory: about 110 bytes per triangle with Embree's structure (the
+  // demo's 1024 x 1024 map at 0.5 texel: 28 M triangles, 3.1 GB).
+  size_t max_triangles = size_t(1) << 25;
+};
+
+// The TRUE displaced surface ray traced with Embree 3: every base point p(b) moved along its
+// normalised interpolated vertex normal by the displacement map sampled at its UV exactly as
+// the shaders' GL_LINEAR lookups do (texel centres at +0.5; border clamp, or wrap when a
+// loaded stream was made with --wrap), tessellated as described in ReferenceOptions. A
+// sub-triangle edge is cut at its midpoint exactly when it is longer than the target, which
+// depends on the edge alone, so neighbouring triangles cut shared edges alike, and points on
+// an edge between base triangles with the same UVs there are computed bitwise alike from
+// both sides: the surface has no cracks except where the displaced surface itself is torn
+// (UV seams whose two sides' heights differ). `base` must outlive the renderer (it needs
+// vertex normals and UVs); the maps are copied.
+class ReferenceRenderer {
+ public:
+  ReferenceRenderer(const Mesh& base, const PreviewMaps& maps, const ReferenceOptions& options = {});
+  ~ReferenceRenderer();
+  ReferenceRenderer(const ReferenceRenderer&) = delete;
+  ReferenceRenderer& operator=(const ReferenceRenderer&) = delete;
+
+  // The same image as render_headless for options.width x height, camera and shade, pixel
+  // centres and camera identical to the OpenGL renderer's (frame_camera), rows from the top,
+  // RGBA float, alpha 1 where the ray hits the displaced surface and 0 elsewhere (RGB 0):
+  //   uv:     R, G = the hit's UV (interpolated along the sub-triangle), B = 0;
+  //   height: R = the displacement map at the hit's UV (the shader's lookup);
+  //   lit:    the shader's Lambert term with the normal map at the hit's UV decoded in the
+  //           base frame at the hit's base point, flipped on base faces turned away from
+  //           the eye (as gl_FrontFacing does), sRGB encoded.
+  // options.method and options.iterations are ignored. Parallel over rows (TBB); the
+  // result does not depend on the number of threads.
+  Image render(const PreviewOptions& options) const;
+
+  size_t triangle_count() const;
+  // The longest UV edge of any sub-triangle, in texels of the displacement map.
+  double max_edge_texels() const;
+  // Wall time of the tessellation and the Embree build, milliseconds.
+  double build_ms() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// One reference frame (builds a ReferenceRenderer with default options and renders).
+Image render_reference(const Mesh& base, const PreviewMaps& maps, const PreviewOptions& options);
+
+// ---- Method against reference ----
+
+struct CompareOptions {
+  // Methods to compare, in this order; empty: every method of preview_methods() whose
+  // stream is in the maps.
+  std::vector<std::string> methods;
+  // width, height, camera and iteration budget; the method is ignored, the shade only
+  // chooses Comparison::reference_view.
+  PreviewOptions view;
+  double uv_tolerance_texels = 1.0;  // a visible point farther from the reference's is a wrong hit
+  int repetitions = 5;             // timed draws per method (median)
+  ReferenceOptions reference;
+};
+
+struct MethodComparison {
+  std::string name;
+  size_t pixels = 0;  // pixels covered by the reference or the method (or both)
+  size_t wrong_hits = 0;
+  // wrong_hits / pixels: pixels covered by one of the two only, or whose visible points'
+  // UVs differ by more than uv_tolerance_texels (Euclidean, in texels of the displacement
+  // map; across the border of a tiling map the shorter way round).
+  double wrong_hit_fraction = 0;
+  // Of the lit images over the same pixels (a pixel off one image counts with that image's
+  // transparent black), RGB, on the sRGB-encoded values in [0, 1] (1 = 255 in the PNG),
+  // unquantised; psnr = 20 log10(1 / rmse) dB, infinite when the images are equal.
+  double rmse = 0, psnr = 0;
+  // Texture fetches per pixel on the method's mesh pixels (HeadlessPreview::render's
+  // `fetches`): mean and 99th percentile (nearest rank).
+  double mean_iterations = 0, p99_iterations = 0;
+  double max_iterations = 0;
+  double ms = 0;  // HeadlessPreview::time_draw of the lit frame
+  Image fetches;  // the per-pixel counts (2 channels, see HeadlessPreview::render)
+};
+
+struct Comparison {
+  size_t reference_triangles = 0;
+  double reference_max_edge_texels = 0;
+  double reference_build_ms = 0;
+  double reference_ms = 0;  // ray tracing the uv frame (the lit frame takes as long)
+  PreviewOptions view;
+  double uv_tolerance_texels = 1.0;
+  std::vector<MethodComparison> methods;
+  Image reference_uv, reference_lit;
+  Image reference_view;  // the reference in CompareOptions::view.shade
+};
+
+// Renders the reference once (uv and lit shades) and each method (uv and lit, with its
+// fetch counts, then timed), and measures each against the reference. Throws UsageError
+// for an unknown method or one whose stream is not in the maps, InternalError without
+// OpenGL 4.5.
+Comparison compare_methods(const Mesh& base, const PreviewMaps& maps, const CompareOptions& options);
+
+// The comparison as a JSON object (what `meso preview --compare --json` prints):
+//   {"reference": {"triangles", "max_edge_texels", "build_ms", "ms"},
+//    "width", "height", "view_angle", "azimuth", "zoom", "iterations", "uv_tolerance_texels",
+//    "methods": [{"name", "pixels", "wrong_hit_fraction", "rmse", "psnr", "mean_iterations",
+//                 "p99_iterations", "max_iterations", "ms"}, ...]}
+// psnr is null when infinite.
+std::string comparison_json(const Comparison& comparison);
+
+// A colour picture of fetch counts (HeadlessPreview::render's `fetches`): RGBA, the viridis
+// ramp (dark blue 0, green, yellow at `max_fetches` and above) over
+// log2(1 + fetches) / log2(1 + max_fetches); alpha 1 on the mesh, 0 (and black) elsewhere.
+Image fetch_heatmap(const Image& fetches, double max_fetches);
 
 // Opens a window and renders interactively until it is closed: left drag orbits, wheel
 // zooms, 1-9 and 0 choose among the first ten methods, Tab (Shift+Tab) goes to the next
