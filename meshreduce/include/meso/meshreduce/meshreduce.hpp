@@ -1,21 +1,50 @@
 // meshreduce: quadric-error (Garland & Heckbert 1997) edge-collapse reduction of a
-// high-poly mesh to a base mesh, built on OpenMesh's Decimater with composed modules.
+// high-poly mesh to a base mesh.
+//
+// meso's own collapse loop on OpenMesh's collapse primitives (is_collapse_ok, collapse):
+// per-vertex area-weighted plane quadrics, cached, summed on collapse; optimal placement of
+// the kept vertex; one lean indexed heap of edges; constraints as small composable modules
+// (chart guard, UV folds, normal flips, normal deviation, needles, error bound) that are
+// asked only about the collapse about to be made. See meshreduce/src/collapse_loop.hpp.
 #pragma once
 
 #include "meso/core/mesh.hpp"
 #include "meso/core/progress.hpp"
 
 #include <cstddef>
+#include <map>
+#include <string>
 
 namespace meso {
 
 struct ReduceOptions {
-  size_t target_faces = 0;          // stop at this many faces (or the closest reachable count)
+  // Targets. Reduction stops at the first one met; at least one must be set.
+  size_t target_faces = 0;  // stop at this many faces (or the closest reachable count)
+  // Largest allowed geometric error, in object units (< 0: none). Every collapse is checked
+  // against samples both ways (input vertices, edge midpoints and three points per face to
+  // the new faces; the new vertex, edge midpoints and face centroids to the input triangles)
+  // held to 0.7 of this bound, since the surfaces can drift further apart between samples;
+  // reduction goes on until no collapse keeps it. Measured (surface_distance.hpp): the
+  // two-sided Hausdorff distance stays at or under the bound on the test and bench meshes.
+  double max_error = -1;
+
   // A vertex on a mesh boundary or UV seam may only slide along it, and only where the
-  // boundary is straight: its distance to the chord of its two boundary neighbours, in
-  // object units and in UV units, must stay below these tolerances.
+  // boundary is straight: the old outline must stay within these tolerances of the new one,
+  // in object units and in UV units.
   float boundary_tolerance = 1e-3f;  // as a fraction of the bounding-box diagonal
   float uv_tolerance = 1e-4f;        // in UV units
+  // Weight of the planes through boundary and seam edges, perpendicular to their faces,
+  // relative to the area-weighted surface planes (Garland & Heckbert's boundary planes).
+  double boundary_weight = 100.0;
+  // Largest angle, in degrees, between an output face's normal and the normal of any input
+  // face it replaced (normal cones, as OpenMesh's ModNormalDeviation). 180 (the default)
+  // turns it off: a base mesh for displacement has to average away relief whose normals
+  // turn by up to 90 degrees. Normal flips are refused whatever this is.
+  float max_normal_deviation = 180.0f;
+  // Needles: a collapse may not create a face whose aspect ratio (longest edge squared
+  // times sqrt(3) over four times its area: 1 for an equilateral triangle) exceeds this,
+  // unless the faces it replaces were already worse. 0 turns it off.
+  float max_aspect_ratio = 40.0f;
 };
 
 struct ReduceReport {
@@ -24,15 +53,31 @@ struct ReduceReport {
   size_t collapses = 0;
   bool target_reached = false;  // false when constraints stopped reduction before the target
   double seconds = 0;
+  // Candidate collapses that each constraint refused (an edge may be counted again after
+  // its neighbourhood changed), by module name.
+  std::map<std::string, size_t> rejected;
+  // Largest quadric error of a collapse made (sum of squared, area-weighted plane distances
+  // in the normalised unit box; for diagnostics).
+  double max_quadric_cost = 0;
+  // With max_error: the largest distance from an input sample to the output face it is
+  // tracked on, in object units (-1 when not tracked).
+  double tracked_error = -1;
 };
 
 // Returns the reduced mesh. Guarantees:
-//  - every collapse keeps the surface orientation (no face normal flips) and, when the input
-//    has UVs, keeps every UV triangle's orientation (no chart folds) and the UVs of the kept
-//    vertex exact (the kept vertex keeps its position and its UVs: collapses go onto an
-//    existing vertex, OpenMesh's ModQuadric placement);
-//  - boundaries and UV seams are never torn; their vertices only slide along straight parts;
-//  - output faces are compacted (no deleted elements), groups kept per face.
+//  - every collapse passes OpenMesh's topological test (is_collapse_ok: manifold, no
+//    duplicate faces);
+//  - no face normal flips, and no output face deviates more than max_normal_deviation from
+//    the input faces it replaced; no collapse creates a needle beyond max_aspect_ratio;
+//  - when the input has UVs: no UV triangle flips or becomes degenerate, the UVs of the
+//    moved vertex are re-fitted (interior vertices: barycentric re-projection of the new
+//    position onto the old neighbourhood; seam/boundary vertices: linear interpolation
+//    along the seam), seams are kept in every chart;
+//  - boundaries and UV seams are never torn; their vertices only slide along straight parts
+//    and stay on the old seam/boundary polyline; corners of the seam network stay put;
+//  - output faces are compacted (no deleted elements), groups kept per face, vertex normals
+//    recomputed (angle-weighted);
+//  - deterministic: the same input and options give the same output, bit for bit.
 // The input is not modified.
 Mesh reduce_mesh(const Mesh& input, const ReduceOptions& options, ReduceReport* report = nullptr,
                  Progress& progress = null_progress());

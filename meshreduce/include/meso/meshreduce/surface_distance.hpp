@@ -1,0 +1,50 @@
+// The geometric error between two surfaces, as meso measures it everywhere (meshreduce's
+// report, its tests and bench/meshreduce_peers): approximate two-sided Hausdorff and RMS
+// distance by dense sampling.
+//
+// Each mesh is sampled at all its vertices plus `samples` points spread over its faces in
+// proportion to area (a fixed-seed generator: the same meshes give the same figures); each
+// sample's exact distance to the other mesh's triangles comes from a CGAL AABB tree
+// (closest-point queries on all non-degenerate triangles). forward = max over samples of
+// `a` of their distance to `b`, backward = the reverse, hausdorff = max of both; the RMS
+// values are over the same samples. Like CGAL's approximate_Hausdorff_distance, the result
+// is a lower bound that converges to the true distance as samples grow.
+#pragma once
+
+#include "meso/core/mesh.hpp"
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace meso {
+
+struct SurfaceDistanceOptions {
+  // Points sampled on the faces of each mesh (besides its vertices); 0: twice the larger
+  // face count, at least 100,000 and at most 4,000,000.
+  size_t samples = 0;
+  uint64_t seed = 1;
+};
+
+struct SurfaceDistance {
+  double forward = 0, backward = 0, hausdorff = 0;  // object units
+  double rms_forward = 0, rms_backward = 0, rms = 0;
+  size_t samples_a = 0, samples_b = 0;
+  double seconds = 0;
+};
+
+// Triangles as index triples into points: for peers' outputs that need not be manifold.
+struct TriangleSoup {
+  std::vector<Vec3f> points;
+  std::vector<std::array<uint32_t, 3>> triangles;
+};
+TriangleSoup triangle_soup(const Mesh& mesh);  // live faces; points = the mesh's vertices
+
+// Distances between the surfaces of `a` and `b` (typically input and reduced output).
+// Meshes without a non-degenerate face give infinite distances. Multi-threaded (TBB);
+// results do not depend on the thread count.
+SurfaceDistance measure_surface_distance(const Mesh& a, const Mesh& b, const SurfaceDistanceOptions& options = {});
+SurfaceDistance measure_surface_distance(const TriangleSoup& a, const TriangleSoup& b, const SurfaceDistanceOptions& options = {});
+
+}  // namespace meso

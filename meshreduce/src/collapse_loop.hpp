@@ -1,0 +1,161 @@
+// meso's edge-collapse loop on OpenMesh's collapse primitives.
+//
+// Why not OpenMesh's DecimaterT: its heap holds one entry per vertex and, after every
+// collapse, re-evaluates every outgoing halfedge of every vertex of the old one-ring with
+// every module (about 40 full legality and priority evaluations per collapse), and it
+// cannot move the kept vertex (ModQuadric places it on an endpoint). Here:
+//  - the heap holds edges (an indexed binary heap: key + edge per slot, one position per
+//    edge; no stale entries, no allocation after setup);
+//  - an edge's key is its quadric cost at its placement (cheap: a 10-double sum and two
+//    regularised 3x3 solves by cofactors, quadric.hpp); the legality tests (topology, then the modules) run only
+//    on the edge about to be collapsed; a refused edge leaves the heap and comes back when a
+//    collapse changes its neighbourhood (an endpoint adjacent to the new vertex);
+//  - after a collapse only the edges around the new vertex get new keys (no other quadric
+//    changed).
+// Positions live in a double array in coordinates normalised to the unit box (centre and a
+// power-of-two scale, so unmoved points round-trip exactly); quadrics are per vertex,
+// area-weighted, plus boundary/seam constraint planes.
+#pragma once
+
+#include "meso/core/mesh.hpp"
+#include "meso/core/progress.hpp"
+
+#include "quadric.hpp"
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace meso::reduce {
+
+using Vec2f = OpenMesh::Vec2f;
+
+// Where the kept vertex goes.
+enum class Placement : uint8_t {
+  optimal,  // both endpoints inside a chart: the quadric's minimiser (with fallbacks)
+  onto,     // v0 inside a chart, v1 on a seam/boundary: v1 stays where it is
+  slide,    // a seam/boundary edge: the kept vertex moves along the edge (t in [0, 1])
+};
+
+// A face that survives the collapse and has v0 or v1 as a corner ("the moving corner").
+struct FanFace {
+  FaceHandle f;
+  HalfedgeHandle corner;  // the halfedge into the moving corner in f, before the collapse
+  Vec3d old_p, b, c;      // the moving corner before, then the other two corners (winding order)
+  Vec2f old_uv, uv_b, uv_c, new_uv;
+  bool adjacent_fl = false, adjacent_fr = false;  // shares an edge with fl / fr
+  bool from_v0 = false;  // the moving corner is v0 (else v1)
+  uint8_t side = 0;      // slides: on fl's side of the seam (0) or fr's (1)
+};
+
+// The collapse of halfedge h: v0 = from(h) disappears, v1 = to(h) is kept and moves to q.
+struct Candidate {
+  Mesh::EdgeHandle e;
+  HalfedgeHandle h;
+  VertexHandle v0, v1;
+  FaceHandle fl, fr;       // the faces of h and of its opposite (either may be invalid)
+  Placement placement = Placement::optimal;
+  double t = 1;            // slide: q = p0 + t (p1 - p0)
+  Vec3d p0, p1, q;
+  double cost = 0;
+  // Slides: v0's and v1's other seam/boundary neighbours (invalid if v1 is a corner), and
+  // their UVs on the side of fl (0) and fr (1).
+  VertexHandle other0, other1;
+  Vec2f uv0[2], uv1[2], uv_other0[2], uv_other1[2];
+  bool side_valid[2] = {false, false};
+  const std::vector<FanFace>* fan = nullptr;  // faces around v0 and v1 but fl and fr
+};
+
+class CollapseLoop;
+
+// A constraint on collapses (the counterpart of an OpenMesh Decimater binary module): asked
+// about each collapse about to be made, told about each one made.
+class CollapseModule {
+ public:
+  virtual ~CollapseModule() = default;
+  virtual const char* name() const = 0;
+  // Called once, after the loop has set up positions, quadrics and features.
+  virtual void initialize(CollapseLoop&) {}
+  // Whether the collapse keeps the module's guarantee.
+  virtual bool allow(const Candidate& c) = 0;
+  // The collapse is about to be made (every module allowed it); the mesh is still as before.
+  virtual void commit(const Candidate&) {}
+  size_t rejected = 0;
+};
+
+struct LoopOptions {
+  size_t target_faces = 0;
+  bool has_uvs = false;
+  double boundary_weight = 100.0;
+};
+
+class CollapseLoop {
+ public:
+  // `mesh` must be garbage-collected, with status attributes. Positions are normalised here.
+  CollapseLoop(Mesh& mesh, const LoopOptions& options);
+
+  void add(std::unique_ptr<CollapseModule> module) { modules_.push_back(std::move(module)); }
+
+  // Runs until the face target is met or no legal collapse remains; returns the collapses made.
+  size_t run(Progress& progress);
+
+  // Writes moved positions back to the mesh (object units). Unmoved vertices keep their
+  // input coordinates bit for bit.
+  void write_back();
+
+  // Read access for modules.
+  const Mesh& mesh() const { return mesh_; }
+  const Vec3d& pos(VertexHandle v) const { return pos_[static_cast<size_t>(v.idx())]; }
+  bool is_feature(Mesh::EdgeHandle e) const { return efeat_[static_cast<size_t>(e.idx())] != 0; }
+  double scale() const { return scale_; }  // object units -> normalised units
+  size_t faces() const { return faces_; }
+  double max_cost() const { return max_cost_; }
+  const std::vector<std::unique_ptr<CollapseModule>>& modules() const { return modules_; }
+
+ private:
+  struct Slot {
+    float key;
+    int edge;
+  };
+
+  bool evaluate(Mesh::EdgeHandle e, Candidate& c);
+  void gather_fan(Candidate& c);
+  void walk(Candidate& c, VertexHandle v, HalfedgeHandle start, int start_side, bool from_v0);
+  Vec2f reproject_uv(const Candidate& c) const;
+  bool folds(const Vec2f& uv) const;  // whether giving every fan face this UV folds one
+  void apply(const Candidate& c);
+  void update_features_around(VertexHandle w);
+  uint16_t feature_degree(VertexHandle v) const;
+  bool seam(Mesh::EdgeHandle e) const;
+
+  // Indexed binary heap on (key, edge).
+  bool less(const Slot& a, const Slot& b) const { return a.key < b.key || (a.key == b.key && a.edge < b.edge); }
+  void heap_set(int edge, float key);
+  void heap_remove(int edge);
+  void sift_up(size_t i);
+  void sift_down(size_t i);
+  void place(size_t i, const Slot& s) {
+    heap_[i] = s;
+    hpos_[static_cast<size_t>(s.edge)] = static_cast<int>(i);
+  }
+  void push_edge(Mesh::EdgeHandle e);
+
+  Mesh& mesh_;
+  LoopOptions options_;
+  Vec3d center_{0, 0, 0};
+  double scale_ = 1;
+  std::vector<Vec3d> pos_;
+  std::vector<Quadric> quadric_;
+  std::vector<uint8_t> efeat_, moved_;
+  std::vector<uint16_t> vdeg_;  // feature edges per vertex
+  std::vector<Slot> heap_;
+  std::vector<int> hpos_;
+  std::vector<FanFace> fan_;
+  std::vector<int> around_;  // edges around the collapsing edge's ends
+  std::vector<std::unique_ptr<CollapseModule>> modules_;
+  size_t faces_ = 0;
+  double max_cost_ = 0;
+};
+
+}  // namespace meso::reduce

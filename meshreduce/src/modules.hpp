@@ -1,0 +1,376 @@
+// The constraints of meshreduce, one small module each (see CollapseModule). Each looks at
+// the candidate's fan: the faces that survive the collapse with v0 or v1 as a corner, their
+// old corner positions and UVs, and the new position q and UVs.
+#pragma once
+
+#include "collapse_loop.hpp"
+#include "geometry.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+namespace meso::reduce {
+
+inline Vec3d new_normal(const FanFace& f, const Vec3d& q) { return OpenMesh::cross(f.b - q, f.c - q); }
+inline Vec3d old_normal(const FanFace& f) { return OpenMesh::cross(f.b - f.old_p, f.c - f.old_p); }
+
+// Keeps UV charts and the outline: a seam/boundary vertex slides only along a straight
+// stretch. The outline before (... other0, v0, v1, other1 ...) must stay within the
+// tolerance of the outline after (... other0, q, other1 ...), in 3D (normalised units) and
+// in the UVs of each chart along the seam. Also refuses sliver wedges (both feature edges of
+// a vertex in one triangle: the collapse would glue a chart's edge to another chart).
+class ChartGuard final : public CollapseModule {
+ public:
+  ChartGuard(const CollapseLoop& loop, double position_tolerance, double uv_tolerance)
+      : loop_(loop), pos_tol_(position_tolerance), uv_tol_(uv_tolerance) {}
+  const char* name() const override { return "chart_guard"; }
+
+  bool allow(const Candidate& c) override {
+    if (c.placement != Placement::slide) return true;
+    const Mesh& m = loop_.mesh();
+    if (!c.other0.is_valid()) return false;
+    VertexHandle vl, vr;
+    if (c.fl.is_valid()) vl = m.to_vertex_handle(m.next_halfedge_handle(c.h));
+    if (c.fr.is_valid()) vr = m.to_vertex_handle(m.next_halfedge_handle(m.opposite_halfedge_handle(c.h)));
+    if (c.other0 == vl || c.other0 == vr || c.other0 == c.v1) return false;
+    const bool v1_moves = c.t < 1 && c.other1.is_valid();
+    if (c.other1.is_valid() && (c.other1 == vl || c.other1 == vr || c.other1 == c.other0 || c.other1 == c.v0)) return false;
+    if (point_segment_distance(c.p0, loop_.pos(c.other0), c.q) > pos_tol_) return false;
+    if (v1_moves && point_segment_distance(c.p1, c.q, loop_.pos(c.other1)) > pos_tol_) return false;
+    if (!m.has_halfedge_texcoords2D()) return true;
+    for (int s = 0; s < 2; ++s) {
+      if (!c.side_valid[s]) continue;
+      const Vec2f nu = lerp_uv(c.uv0[s], c.uv1[s], c.t);
+      if (point_segment_distance(c.uv0[s], c.uv_other0[s], nu) > uv_tol_) return false;
+      if (v1_moves && point_segment_distance(c.uv1[s], nu, c.uv_other1[s]) > uv_tol_) return false;
+    }
+    return true;
+  }
+
+ private:
+  const CollapseLoop& loop_;
+  double pos_tol_, uv_tol_;
+};
+
+// No UV triangle flips or becomes degenerate (one already degenerate cannot get worse).
+class UvFoldGuard final : public CollapseModule {
+ public:
+  const char* name() const override { return "uv_fold"; }
+  bool allow(const Candidate& c) override {
+    for (const auto& f : *c.fan) {
+      const double before = uv_cross(f.old_uv, f.uv_b, f.uv_c);
+      if (before == 0) continue;
+      const double after = uv_cross(f.new_uv, f.uv_b, f.uv_c);
+      if (after * before <= 0) return false;
+    }
+    return true;
+  }
+};
+
+// No face normal flips and no new degenerate face.
+class NoFlip final : public CollapseModule {
+ public:
+  const char* name() const override { return "normal_flip"; }
+  bool allow(const Candidate& c) override {
+    for (const auto& f : *c.fan) {
+      const Vec3d n0 = old_normal(f);
+      const double l0 = n0.sqrnorm();
+      if (!(l0 > 0)) continue;  // already degenerate
+      const Vec3d n1 = new_normal(f, c.q);
+      const double l1 = n1.sqrnorm();
+      // Degenerate: sin of the corner angle at q below 1e-9.
+      const double scale = (f.b - c.q).sqrnorm() * (f.c - c.q).sqrnorm();
+      if (!(l1 > 1e-18 * scale)) return false;
+      if (OpenMesh::dot(n0, n1) <= 0) return false;
+    }
+    return true;
+  }
+};
+
+// Normal cones per face (OpenMesh's ModNormalDeviation): every face keeps the cone of the
+// normals of the input faces it replaced; a collapse is refused when a new normal would lie
+// more than max_deviation from any normal in its face's cone.
+class NormalDeviation final : public CollapseModule {
+ public:
+  explicit NormalDeviation(double max_deviation_degrees) : max_(max_deviation_degrees * M_PI / 180.0) {}
+  const char* name() const override { return "normal_deviation"; }
+
+  void initialize(CollapseLoop& loop) override {
+    const Mesh& m = loop.mesh();
+    cones_.assign(m.n_faces(), Cone());
+    for (auto f : m.faces()) {
+      const auto hs = face_halfedges(m, f);
+      const Vec3d& a = loop.pos(m.to_vertex_handle(hs[0]));
+      Vec3d n = OpenMesh::cross(loop.pos(m.to_vertex_handle(hs[1])) - a, loop.pos(m.to_vertex_handle(hs[2])) - a);
+      const double l = n.norm();
+      if (l > 0) cones_[static_cast<size_t>(f.idx())] = Cone{n / l, 0.0};
+    }
+  }
+
+  bool allow(const Candidate& c) override {
+    merged_.clear();
+    for (const auto& f : *c.fan) {
+      Cone cone = cone_of(f, c);
+      Vec3d n = new_normal(f, c.q);
+      const double l = n.norm();
+      if (!(l > 0)) return false;
+      n /= l;
+      if (!cone.empty() && angle(n, cone.axis) + cone.angle > max_) return false;
+      cone.merge(Cone{n, 0.0});
+      merged_.push_back(cone);
+    }
+    return true;
+  }
+
+  void commit(const Candidate& c) override {
+    for (size_t i = 0; i < c.fan->size(); ++i) cones_[static_cast<size_t>((*c.fan)[i].f.idx())] = merged_[i];
+  }
+
+ private:
+  struct Cone {
+    Vec3d axis{0, 0, 0};
+    double angle = -1;  // < 0: empty
+    bool empty() const { return angle < 0; }
+    void merge(const Cone& o) {
+      if (o.empty()) return;
+      if (empty()) {
+        *this = o;
+        return;
+      }
+      const double between = NormalDeviation::angle(axis, o.axis);
+      if (between + o.angle <= angle) return;
+      if (between + angle <= o.angle) {
+        *this = o;
+        return;
+      }
+      const double wide = 0.5 * (between + angle + o.angle);
+      if (wide >= M_PI || between > M_PI - 1e-9) {
+        angle = M_PI;
+        return;
+      }
+      // Rotate the axis towards o's by (wide - angle) in the plane of the two axes.
+      const double turn = wide - angle, s = std::sin(between);
+      axis = (axis * std::sin(between - turn) + o.axis * std::sin(turn)) / s;
+      axis.normalize();
+      angle = wide;
+    }
+  };
+
+  static double angle(const Vec3d& a, const Vec3d& b) { return std::acos(std::clamp(OpenMesh::dot(a, b), -1.0, 1.0)); }
+
+  Cone cone_of(const FanFace& f, const Candidate& c) const {
+    Cone cone = cones_[static_cast<size_t>(f.f.idx())];
+    if (f.adjacent_fl) cone.merge(cones_[static_cast<size_t>(c.fl.idx())]);
+    if (f.adjacent_fr) cone.merge(cones_[static_cast<size_t>(c.fr.idx())]);
+    return cone;
+  }
+
+  double max_;
+  std::vector<Cone> cones_;
+  std::vector<Cone> merged_;
+};
+
+// No needles: a collapse may not create a face whose aspect ratio exceeds the bound unless
+// the faces it replaces (around v0 and v1) already had one at least as bad.
+class AspectRatioGuard final : public CollapseModule {
+ public:
+  AspectRatioGuard(const CollapseLoop& loop, double max_ratio) : loop_(loop), max_(max_ratio) {}
+  const char* name() const override { return "aspect_ratio"; }
+  bool allow(const Candidate& c) override {
+    double worst_new = 0;
+    for (const auto& f : *c.fan) worst_new = std::max(worst_new, aspect_ratio(c.q, f.b, f.c));
+    if (worst_new <= max_) return true;
+    double worst_old = 0;
+    for (const auto& f : *c.fan) worst_old = std::max(worst_old, aspect_ratio(f.old_p, f.b, f.c));
+    const Mesh& m = loop_.mesh();
+    for (const HalfedgeHandle h : {c.h, m.opposite_halfedge_handle(c.h)}) {
+      if (!m.face_handle(h).is_valid()) continue;
+      worst_old = std::max(worst_old, aspect_ratio(loop_.pos(m.from_vertex_handle(h)), loop_.pos(m.to_vertex_handle(h)),
+                                                   loop_.pos(m.to_vertex_handle(m.next_halfedge_handle(h)))));
+    }
+    return worst_new <= worst_old;
+  }
+
+ private:
+  const CollapseLoop& loop_;
+  double max_;
+};
+
+// The error bound, both ways, checked on the collapse's neighbourhood only.
+//  - Input to output: every input vertex, every input edge's midpoint and three points
+//    inside every input face (at barycentric (2/3, 1/6, 1/6) and rotations) are samples, each kept in a list on a face
+//    of the current mesh within the bound of it (at first: a face it lies on). A collapse
+//    re-checks the samples of the faces it touches (fan, fl, fr) against the new fan: a
+//    sample stays on its face while that face (moved) is within the bound, else goes to the
+//    nearest fan face; the collapse is refused when one is farther than the bound from all.
+//  - Output to input: the new vertex, the centroids of the new fan faces and the midpoints
+//    of their new edges must lie within the bound of the input surface (exact distance to
+//    the input triangles, found through a uniform grid of cells at least the bound wide).
+// Lists are linked through one array, the grid is built once: no allocation per collapse
+// once the scratch vectors have grown.
+class ErrorBound final : public CollapseModule {
+ public:
+  explicit ErrorBound(double max_error) : max_(max_error), max2_(max_error * max_error) {}
+  const char* name() const override { return "error_bound"; }
+
+  void initialize(CollapseLoop& loop) override {
+    const Mesh& m = loop.mesh();
+    head_.assign(m.n_faces(), -1);
+    sample_.clear();
+    next_.clear();
+    auto add = [&](const Vec3d& p, FaceHandle f) {
+      const int s = static_cast<int>(sample_.size());
+      sample_.push_back(p);
+      next_.push_back(head_[static_cast<size_t>(f.idx())]);
+      head_[static_cast<size_t>(f.idx())] = s;
+    };
+    for (auto v : m.vertices()) {
+      for (auto vf : m.vf_range(v)) {
+        add(loop.pos(v), vf);
+        break;
+      }
+    }
+    for (auto e : m.edges()) {
+      const HalfedgeHandle h = m.halfedge_handle(e, m.is_boundary(m.halfedge_handle(e, 0)) ? 1 : 0);
+      add((loop.pos(m.from_vertex_handle(h)) + loop.pos(m.to_vertex_handle(h))) * 0.5, m.face_handle(h));
+    }
+    triangle_.clear();
+    double edge_sum = 0;
+    for (auto f : m.faces()) {
+      const auto hs = face_halfedges(m, f);
+      const std::array<Vec3d, 3> t = {loop.pos(m.to_vertex_handle(hs[0])), loop.pos(m.to_vertex_handle(hs[1])),
+                                      loop.pos(m.to_vertex_handle(hs[2]))};
+      triangle_.push_back(t);
+      edge_sum += (t[1] - t[0]).norm() + (t[2] - t[1]).norm() + (t[0] - t[2]).norm();
+      for (size_t k = 0; k < 3; ++k) add(t[k] * (2.0 / 3.0) + (t[(k + 1) % 3] + t[(k + 2) % 3]) / 6.0, f);
+    }
+    // The grid: cells no narrower than the bound (a query looks at 2x2x2 cells at most) nor
+    // than the mean edge (a triangle spans few cells), nor than 2^-20 of the unit box.
+    const double mean_edge = triangle_.empty() ? 1.0 : edge_sum / (3.0 * static_cast<double>(triangle_.size()));
+    cell_ = std::max({max_, mean_edge, std::ldexp(1.0, -20)});
+    cells_.clear();
+    for (size_t i = 0; i < triangle_.size(); ++i) {
+      const auto& t = triangle_[i];
+      Vec3d lo = t[0], hi = t[0];
+      for (const auto& p : t) lo.minimize(p), hi.maximize(p);
+      const auto a = cell_of(lo), b = cell_of(hi);
+      for (int64_t x = a[0]; x <= b[0]; ++x)
+        for (int64_t y = a[1]; y <= b[1]; ++y)
+          for (int64_t z = a[2]; z <= b[2]; ++z) cells_.push_back({key(x, y, z), static_cast<int>(i)});
+    }
+    std::sort(cells_.begin(), cells_.end(), [](const Cell& l, const Cell& r) { return l.key < r.key || (l.key == r.key && l.tri < r.tri); });
+  }
+
+  bool allow(const Candidate& c) override {
+    assign_.clear();
+    const auto& fan = *c.fan;
+    double w[3];
+    auto visit = [&](FaceHandle f, int own) {
+      if (!f.is_valid()) return true;
+      for (int s = head_[static_cast<size_t>(f.idx())]; s >= 0; s = next_[static_cast<size_t>(s)]) {
+        const Vec3d& p = sample_[static_cast<size_t>(s)];
+        if (own >= 0 && closest_point_sqr(p, c.q, fan[size_t(own)].b, fan[size_t(own)].c, w) <= max2_) {
+          assign_.push_back({s, own});
+          continue;
+        }
+        double best = std::numeric_limits<double>::max();
+        int best_i = -1;
+        for (size_t i = 0; i < fan.size(); ++i) {
+          const double d2 = closest_point_sqr(p, c.q, fan[i].b, fan[i].c, w);
+          if (d2 < best) best = d2, best_i = static_cast<int>(i);
+        }
+        if (best > max2_ || best_i < 0) return false;
+        assign_.push_back({s, best_i});
+      }
+      return true;
+    };
+    for (size_t i = 0; i < fan.size(); ++i)
+      if (!visit(fan[i].f, static_cast<int>(i))) return false;
+    if (!visit(c.fl, -1) || !visit(c.fr, -1)) return false;
+    // Output to input.
+    if (!near_input(c.q)) return false;
+    for (const auto& f : fan) {
+      if (!near_input((c.q + f.b + f.c) / 3.0) || !near_input((c.q + f.b) * 0.5)) return false;
+    }
+    return true;
+  }
+
+  void commit(const Candidate& c) override {
+    const auto& fan = *c.fan;
+    for (const auto& f : fan) head_[static_cast<size_t>(f.f.idx())] = -1;
+    if (c.fl.is_valid()) head_[static_cast<size_t>(c.fl.idx())] = -1;
+    if (c.fr.is_valid()) head_[static_cast<size_t>(c.fr.idx())] = -1;
+    for (const auto& a : assign_) {
+      const size_t f = static_cast<size_t>(fan[static_cast<size_t>(a.face)].f.idx());
+      next_[static_cast<size_t>(a.sample)] = head_[f];
+      head_[f] = a.sample;
+    }
+  }
+
+  // The largest distance from a sample to the face it is assigned to, on the final mesh
+  // (normalised units): the tracked one-sided error from the input's samples.
+  double tracked(const CollapseLoop& loop) const {
+    const Mesh& m = loop.mesh();
+    double worst = 0;
+    double w[3];
+    for (auto f : m.faces()) {
+      if (m.status(f).deleted()) continue;
+      const auto hs = face_halfedges(m, f);
+      const Vec3d& a = loop.pos(m.to_vertex_handle(hs[0]));
+      const Vec3d& b = loop.pos(m.to_vertex_handle(hs[1]));
+      const Vec3d& cc = loop.pos(m.to_vertex_handle(hs[2]));
+      for (int s = head_[static_cast<size_t>(f.idx())]; s >= 0; s = next_[static_cast<size_t>(s)])
+        worst = std::max(worst, closest_point_sqr(sample_[static_cast<size_t>(s)], a, b, cc, w));
+    }
+    return std::sqrt(worst);
+  }
+
+ private:
+  struct Assign {
+    int sample, face;
+  };
+  struct Cell {
+    uint64_t key;
+    int tri;
+  };
+
+  std::array<int64_t, 3> cell_of(const Vec3d& p) const {
+    return {static_cast<int64_t>(std::floor(p[0] / cell_)), static_cast<int64_t>(std::floor(p[1] / cell_)),
+            static_cast<int64_t>(std::floor(p[2] / cell_))};
+  }
+  static uint64_t key(int64_t x, int64_t y, int64_t z) {
+    const uint64_t m = (1u << 21) - 1;
+    return ((static_cast<uint64_t>(x) & m) << 42) | ((static_cast<uint64_t>(y) & m) << 21) | (static_cast<uint64_t>(z) & m);
+  }
+
+  // Whether p lies within the bound of an input triangle.
+  bool near_input(const Vec3d& p) const {
+    const auto a = cell_of(p - Vec3d(max_)), b = cell_of(p + Vec3d(max_));
+    double w[3];
+    for (int64_t x = a[0]; x <= b[0]; ++x)
+      for (int64_t y = a[1]; y <= b[1]; ++y)
+        for (int64_t z = a[2]; z <= b[2]; ++z) {
+          const uint64_t k = key(x, y, z);
+          auto it = std::lower_bound(cells_.begin(), cells_.end(), k, [](const Cell& cell, uint64_t v) { return cell.key < v; });
+          for (; it != cells_.end() && it->key == k; ++it) {
+            const auto& t = triangle_[static_cast<size_t>(it->tri)];
+            if (closest_point_sqr(p, t[0], t[1], t[2], w) <= max2_) return true;
+          }
+        }
+    return false;
+  }
+
+  double max_, max2_;
+  std::vector<Vec3d> sample_;
+  std::vector<int> next_, head_;
+  std::vector<std::array<Vec3d, 3>> triangle_;
+  double cell_ = 1;
+  std::vector<Cell> cells_;
+  std::vector<Assign> assign_;
+};
+
+}  // namespace meso::reduce

@@ -1,0 +1,147 @@
+// meshreduce's one CGAL translation unit (compile time): AABB-tree distance queries.
+#include "meso/meshreduce/surface_distance.hpp"
+
+#include <CGAL/AABB_traits.h>
+#include <CGAL/AABB_tree.h>
+#include <CGAL/AABB_triangle_primitive.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+namespace meso {
+
+namespace {
+
+using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Point = K::Point_3;
+using Triangle = K::Triangle_3;
+using Iterator = std::vector<Triangle>::const_iterator;
+using Primitive = CGAL::AABB_triangle_primitive<K, Iterator>;
+using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
+
+// splitmix64: a portable generator, so samples are the same on every platform.
+struct Random {
+  uint64_t state;
+  uint64_t next() {
+    uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+  }
+  double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
+};
+
+Point point(const Vec3f& p) { return Point(p[0], p[1], p[2]); }
+
+std::vector<Triangle> triangles(const TriangleSoup& m) {
+  std::vector<Triangle> out;
+  out.reserve(m.triangles.size());
+  for (const auto& t : m.triangles) {
+    const Triangle tri(point(m.points[t[0]]), point(m.points[t[1]]), point(m.points[t[2]]));
+    if (!tri.is_degenerate()) out.push_back(tri);
+  }
+  return out;
+}
+
+// Every point used by a triangle, plus `n` points spread over the triangles by area.
+std::vector<Point> sample(const TriangleSoup& m, const std::vector<Triangle>& tris, size_t n, uint64_t seed) {
+  std::vector<Point> out;
+  std::vector<char> used(m.points.size(), 0);
+  for (const auto& t : m.triangles)
+    for (const uint32_t i : t) used[i] = 1;
+  for (size_t i = 0; i < m.points.size(); ++i)
+    if (used[i]) out.push_back(point(m.points[i]));
+  double total = 0;
+  for (const auto& t : tris) total += std::sqrt(t.squared_area());
+  if (!(total > 0)) return out;
+  out.reserve(out.size() + n + tris.size());
+  Random rng{seed};
+  for (const auto& t : tris) {
+    const double expected = static_cast<double>(n) * std::sqrt(t.squared_area()) / total;
+    const size_t count = static_cast<size_t>(expected + rng.uniform());  // stochastic rounding
+    for (size_t i = 0; i < count; ++i) {
+      const double r1 = std::sqrt(rng.uniform()), r2 = rng.uniform();
+      const double wa = 1 - r1, wb = r1 * (1 - r2), wc = r1 * r2;
+      out.emplace_back(wa * t[0].x() + wb * t[1].x() + wc * t[2].x(), wa * t[0].y() + wb * t[1].y() + wc * t[2].y(),
+                       wa * t[0].z() + wb * t[1].z() + wc * t[2].z());
+    }
+  }
+  return out;
+}
+
+// Max and RMS of the distances from `points` to the triangles of `tree`.
+void distances(const std::vector<Point>& points, const Tree& tree, bool empty, double& max, double& rms) {
+  if (points.empty()) {
+    max = rms = 0;
+    return;
+  }
+  if (empty) {
+    max = rms = std::numeric_limits<double>::infinity();
+    return;
+  }
+  std::vector<double> d2(points.size());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 2048), [&](const tbb::blocked_range<size_t>& r) {
+    // Each query on its own (the tree's own hint): a point's distance does not depend on
+    // how the range was split.
+    for (size_t i = r.begin(); i < r.end(); ++i) d2[i] = CGAL::to_double(tree.squared_distance(points[i]));
+  });
+  // Sequential reduction: the same sum whatever the thread count.
+  double m = 0, sum = 0;
+  for (const double d : d2) {
+    m = std::max(m, d);
+    sum += d;
+  }
+  max = std::sqrt(m);
+  rms = std::sqrt(sum / static_cast<double>(d2.size()));
+}
+
+}  // namespace
+
+TriangleSoup triangle_soup(const Mesh& m) {
+  TriangleSoup s;
+  s.points.assign(m.points(), m.points() + m.n_vertices());
+  s.triangles.reserve(m.n_faces());
+  for (auto f : m.faces()) {
+    if (m.status(f).deleted()) continue;
+    const auto hs = face_halfedges(m, f);
+    s.triangles.push_back({static_cast<uint32_t>(m.to_vertex_handle(hs[0]).idx()), static_cast<uint32_t>(m.to_vertex_handle(hs[1]).idx()),
+                           static_cast<uint32_t>(m.to_vertex_handle(hs[2]).idx())});
+  }
+  return s;
+}
+
+SurfaceDistance measure_surface_distance(const Mesh& a, const Mesh& b, const SurfaceDistanceOptions& options) {
+  return measure_surface_distance(triangle_soup(a), triangle_soup(b), options);
+}
+
+SurfaceDistance measure_surface_distance(const TriangleSoup& a, const TriangleSoup& b, const SurfaceDistanceOptions& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const size_t n = options.samples ? options.samples
+                                   : std::clamp<size_t>(2 * std::max(a.triangles.size(), b.triangles.size()), 100000, 4000000);
+  const std::vector<Triangle> ta = triangles(a), tb = triangles(b);
+  const std::vector<Point> sa = sample(a, ta, n, options.seed), sb = sample(b, tb, n, options.seed + 1);
+  Tree tree_a(ta.begin(), ta.end()), tree_b(tb.begin(), tb.end());
+  if (!ta.empty()) tree_a.accelerate_distance_queries();
+  if (!tb.empty()) tree_b.accelerate_distance_queries();
+  SurfaceDistance d;
+  distances(sa, tree_b, tb.empty(), d.forward, d.rms_forward);
+  distances(sb, tree_a, ta.empty(), d.backward, d.rms_backward);
+  d.hausdorff = std::max(d.forward, d.backward);
+  d.samples_a = sa.size();
+  d.samples_b = sb.size();
+  const double total = static_cast<double>(sa.size() + sb.size());
+  d.rms = total > 0 ? std::sqrt((d.rms_forward * d.rms_forward * static_cast<double>(sa.size()) +
+                                 d.rms_backward * d.rms_backward * static_cast<double>(sb.size())) / total)
+                    : 0.0;
+  d.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return d;
+}
+
+}  // namespace meso
