@@ -10,6 +10,7 @@
 // meshoptimizer's meshopt_simplify (positions only, welded; no attributes), when built
 // with libmeshoptimizer-dev. Times are wall-clock, best of --repeat runs, single thread.
 #include "meso/examples/brick_wall.hpp"
+#include "meso/examples/parametric.hpp"
 #include "meso/formats/mesh_io.hpp"
 #include "meso/meshreduce/meshreduce.hpp"
 #include "meso/meshreduce/surface_distance.hpp"
@@ -32,31 +33,15 @@ using namespace meso;
 // A torus (major radius 1, minor 0.35) with a gentle smooth wave on the tube: smooth
 // everywhere, curvature varying; UV = (s, t) with seams where s and t wrap.
 Mesh make_smooth_torus(int columns, int rows) {
-  Mesh m;
-  m.request_halfedge_texcoords2D();
-  auto surface = [](double s, double t) {
-    const double u = 2 * M_PI * s, v = 2 * M_PI * t;
-    const double r = 0.35 + 0.04 * std::sin(3 * u) * std::cos(2 * v);
-    const double R = 1.0 + r * std::cos(v);
-    return Vec3f(static_cast<float>(R * std::cos(u)), static_cast<float>(R * std::sin(u)), static_cast<float>(r * std::sin(v)));
-  };
-  for (int j = 0; j < rows; ++j)
-    for (int i = 0; i < columns; ++i) m.add_vertex(surface(double(i) / columns, double(j) / rows));
-  auto id = [&](int i, int j) { return VertexHandle((j % rows) * columns + (i % columns)); };
-  for (int j = 0; j < rows; ++j)
-    for (int i = 0; i < columns; ++i) {
-      const int q[4][2] = {{i, j}, {i + 1, j}, {i + 1, j + 1}, {i, j + 1}};
-      for (const auto& t : {std::array<int, 3>{0, 1, 2}, std::array<int, 3>{0, 2, 3}}) {
-        const auto f = m.add_face(id(q[t[0]][0], q[t[0]][1]), id(q[t[1]][0], q[t[1]][1]), id(q[t[2]][0], q[t[2]][1]));
-        for (auto h : face_halfedges(m, f))
-          for (int k = 0; k < 3; ++k)
-            if (m.to_vertex_handle(h) == id(q[t[k]][0], q[t[k]][1]))
-              m.set_texcoord2D(h, Vec2f(float(q[t[k]][0]) / columns, float(q[t[k]][1]) / rows));
-      }
-    }
-  set_face_groups(m, {"torus"}, {});
-  compute_angle_weighted_normals(m);
-  return m;
+  return make_parametric_surface(
+      columns, rows,
+      [](double s, double t) {
+        const double u = 2 * M_PI * s, v = 2 * M_PI * t;
+        const double r = 0.35 + 0.04 * std::sin(3 * u) * std::cos(2 * v);
+        const double R = 1.0 + r * std::cos(v);
+        return Vec3f(static_cast<float>(R * std::cos(u)), static_cast<float>(R * std::sin(u)), static_cast<float>(r * std::sin(v)));
+      },
+      true, true, "torus");
 }
 
 double now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }

@@ -1,0 +1,31 @@
+#include "meso/examples/parametric.hpp"
+
+#include <array>
+
+namespace meso {
+
+Mesh make_parametric_surface(int columns, int rows, const std::function<Vec3f(double, double)>& surface, bool wrap_s, bool wrap_t,
+                             const std::string& name) {
+  Mesh m;
+  m.request_halfedge_texcoords2D();
+  const int vc = wrap_s ? columns : columns + 1, vr = wrap_t ? rows : rows + 1;
+  for (int j = 0; j < vr; ++j)
+    for (int i = 0; i < vc; ++i) m.add_vertex(surface(double(i) / columns, double(j) / rows));
+  auto id = [&](int i, int j) { return VertexHandle((j % vr) * vc + (i % vc)); };
+  for (int j = 0; j < rows; ++j)
+    for (int i = 0; i < columns; ++i) {
+      const int q[4][2] = {{i, j}, {i + 1, j}, {i + 1, j + 1}, {i, j + 1}};
+      for (const auto& t : {std::array<int, 3>{0, 1, 2}, std::array<int, 3>{0, 2, 3}}) {
+        const auto f = m.add_face(id(q[t[0]][0], q[t[0]][1]), id(q[t[1]][0], q[t[1]][1]), id(q[t[2]][0], q[t[2]][1]));
+        for (auto h : face_halfedges(m, f))
+          for (int k = 0; k < 3; ++k)
+            if (m.to_vertex_handle(h) == id(q[t[k]][0], q[t[k]][1]))
+              m.set_texcoord2D(h, Vec2f(float(q[t[k]][0]) / columns, float(q[t[k]][1]) / rows));
+      }
+    }
+  set_face_groups(m, {name}, {});
+  compute_angle_weighted_normals(m);
+  return m;
+}
+
+}  // namespace meso
