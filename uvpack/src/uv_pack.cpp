@@ -76,12 +76,17 @@ bool place_all(const std::vector<Chart>& charts, const std::vector<size_t>& orde
   // if none), so a scan jumps over blocked runs instead of stepping through them.
   std::vector<uint8_t> blocked(static_cast<size_t>(n) * static_cast<size_t>(n), 0);
   std::vector<int> next_free(static_cast<size_t>(n) * static_cast<size_t>(n));
+  // next_blocked[row * n + col]: the first blocked column >= col (n if none), so a run of a
+  // footprint row is tested at once: [c0, c1] is free when next_blocked[c0] > c1.
+  std::vector<int> next_blocked(static_cast<size_t>(n) * static_cast<size_t>(n));
   auto refresh_row = [&](int row) {
-    int next = n;
+    int free_col = n, blocked_col = n;
     for (int col = n - 1; col >= 0; --col) {
       const size_t k = static_cast<size_t>(row) * static_cast<size_t>(n) + static_cast<size_t>(col);
-      if (!blocked[k]) next = col;
-      next_free[k] = next;
+      if (blocked[k]) blocked_col = col;
+      else free_col = col;
+      next_free[k] = free_col;
+      next_blocked[k] = blocked_col;
     }
   };
   for (int row = 0; row < n; ++row) refresh_row(row);
@@ -94,6 +99,13 @@ bool place_all(const std::vector<Chart>& charts, const std::vector<size_t>& orde
     for (int r = 0; r < (o.rotate ? 4 : 1); ++r) {
       int bw = 0, bh = 0;
       const auto texels = footprint(charts[c], s, r, bw, bh);
+      // The footprint as runs of consecutive texels per row (row, first, last): texels come
+      // row by row, left to right.
+      std::vector<std::array<int, 3>> runs;
+      for (const auto& t : texels) {
+        if (!runs.empty() && runs.back()[0] == t[1] && runs.back()[2] + 1 == t[0]) runs.back()[2] = t[0];
+        else runs.push_back({t[1], t[0], t[0]});
+      }
       // This orientation's first fit in scan order (lowest row, then leftmost), searched no
       // lower than the best so far.
       bool here = false;
@@ -101,10 +113,12 @@ bool place_all(const std::vector<Chart>& charts, const std::vector<size_t>& orde
         int x = margin;
         while (x + bw <= n - margin) {
           int jump = -1;
-          for (const auto& t : texels) {
-            const size_t k = static_cast<size_t>(y + t[1]) * static_cast<size_t>(n) + static_cast<size_t>(x + t[0]);
-            if (blocked[k]) {
-              jump = next_free[k] - t[0];  // the next x at which this texel is free
+          for (const auto& run : runs) {
+            const size_t row = static_cast<size_t>(y + run[0]) * static_cast<size_t>(n);
+            const int hit = next_blocked[row + static_cast<size_t>(x + run[1])];
+            if (hit <= x + run[2]) {
+              // The run must start past the blocked stretch that begins at `hit`.
+              jump = next_free[row + static_cast<size_t>(hit)] - run[1];
               break;
             }
           }
