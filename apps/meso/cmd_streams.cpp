@@ -170,19 +170,10 @@ void add_streams(CLI::App& app, Context& ctx) {
       }
       nlohmann::json mesh_report;
       if (!vdm->mesh.empty()) {
-        // Object length per unit of UV: sqrt(3D area / UV area) over the faces.
         Mesh base = load_mesh(ctx.globals, vdm->mesh, mesh_report);
         if (!has_uvs(base)) throw InputError(vdm->mesh, "has no texture coordinates; the VDM needs the base mesh's UV scale");
-        double area3 = 0, area_uv = 0;
-        for (auto f : base.faces()) {
-          const auto hs = face_halfedges(base, f);
-          const Vec3f a = base.point(base.to_vertex_handle(hs[0])), b = base.point(base.to_vertex_handle(hs[1])),
-                      c = base.point(base.to_vertex_handle(hs[2]));
-          area3 += 0.5 * static_cast<double>(((b - a) % (c - a)).norm());
-          area_uv += 0.5 * std::abs(static_cast<double>(uv_double_area(base, f)));
-        }
-        if (!(area3 > 0 && area_uv > 0)) throw InputError(vdm->mesh, "has no area in 3D or in UV");
-        const double per_u = std::sqrt(area3 / area_uv);
+        const double per_u = object_length_per_uv(base);
+        if (!(per_u > 0)) throw InputError(vdm->mesh, "has no area in 3D or in UV");
         const std::vector<VertexCurvature> k = fit_curvature(base);
         double lo = 0, hi = 0;
         for (const VertexCurvature& v : k) {

@@ -278,7 +278,8 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
     const double sign = frames[static_cast<size_t>(hs[0].idx())].sign;
     const Eigen::Vector3d b = sign * n.cross(t);
     if (!(n.norm() > 1e-12)) return false;  // opposite normals cancel: no direction to cast along
-    Eigen::Vector3d dir = n.normalized();
+    const Eigen::Vector3d base_normal = n.normalized();  // what "front-facing" is measured against
+    Eigen::Vector3d dir = base_normal;
     float front_reach = r.front;
     if (o.cage) {
       // Toward the cage's point, and no further.
@@ -315,7 +316,7 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
         if (!h.valid()) break;
         RayHit rh;
         rh.d = static_cast<float>(way) * (h.t - eps);
-        rh.front = scene.face_normal(h.prim).dot(dir) > 0;
+        rh.front = scene.face_normal(h.prim).dot(base_normal) > 0;
         rh.prim = h.prim;
         rh.u = h.u;
         rh.v = h.v;

@@ -140,4 +140,16 @@ std::vector<int> uv_charts(const Mesh& mesh, size_t* count) {
   return chart;
 }
 
+double object_length_per_uv(const Mesh& mesh) {
+  double area3 = 0, area_uv = 0;
+  for (auto f : mesh.faces()) {
+    const auto hs = face_halfedges(mesh, f);
+    const Vec3f a = mesh.point(mesh.to_vertex_handle(hs[0])), b = mesh.point(mesh.to_vertex_handle(hs[1])),
+                c = mesh.point(mesh.to_vertex_handle(hs[2]));
+    area3 += 0.5 * static_cast<double>(((b - a) % (c - a)).norm());
+    area_uv += 0.5 * std::abs(static_cast<double>(uv_double_area(mesh, f)));
+  }
+  return area3 > 0 && area_uv > 0 ? std::sqrt(area3 / area_uv) : 0.0;
+}
+
 }  // namespace meso

@@ -93,4 +93,8 @@ inline OpenMesh::Vec3d any_perpendicular(const OpenMesh::Vec3d& n) {
 // The UV-space signed double area of a face (positive for counter-clockwise UVs).
 float uv_double_area(const Mesh& mesh, FaceHandle f);
 
+// Object length per unit of UV: sqrt(surface area / UV area) over all faces (a mapping's
+// mean scale); 0 when either area is 0.
+double object_length_per_uv(const Mesh& mesh);
+
 }  // namespace meso
