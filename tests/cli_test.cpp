@@ -55,7 +55,9 @@ TEST(Cli, HelpVersionAndMethodList) {
   EXPECT_NE(version.out.find("meso "), std::string::npos);
   const Result methods = run("preview --list-methods");
   EXPECT_EQ(methods.code, 0);
-  EXPECT_EQ(methods.out, "bump\nparallax\noffset-limited\nslope\niterative-parallax\nsteep\nrelief\npom\ncone\nrelaxed-cone\nsphere-tracing\n");
+  EXPECT_EQ(methods.out,
+            "mesh\ntessellation\nbump\nparallax\noffset-limited\nslope\niterative-parallax\nsteep\nrelief\npom\ncone\nrelaxed-"
+            "cone\npyramid\nsphere-tracing\ndig\n");
 }
 
 // uvpack pack: the seamed cube's six charts packed with padding; the checker agrees.
@@ -379,11 +381,11 @@ TEST_F(Skeleton, WholePipeline) {
 
   // The measuring instrument: methods against the ray-traced reference, as JSON.
   const std::string base_maps = "preview " + (d / "reduced.obj").string() + " --maps " + (d / "maps").string() + " --streams " + d.path().string();
-  const Result compare = run(base_maps + " --compare --method pom,cone,sphere-tracing --size 64x48 --view-angle 35 --json --heatmaps " +
+  const Result compare = run(base_maps + " --compare --method pom,cone,pyramid,sphere-tracing,dig,tessellation --size 64x48 --view-angle 35 --json --heatmaps " +
                              (d / "heat").string() + " --reference-edge 1");
   ASSERT_EQ(compare.code, 0) << compare.err;
   const auto cmp = nlohmann::json::parse(compare.out);
-  ASSERT_EQ(cmp["methods"].size(), 3u);
+  ASSERT_EQ(cmp["methods"].size(), 6u);
   EXPECT_GT(cmp["reference"]["triangles"].get<size_t>(), reduced.n_faces());
   for (const auto& m : cmp["methods"]) {
     for (const char* key : {"name", "wrong_hit_fraction", "rmse", "psnr", "mean_iterations", "p99_iterations", "ms"})

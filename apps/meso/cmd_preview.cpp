@@ -81,7 +81,7 @@ void add_preview(CLI::App& app, Context& ctx) {
   CLI::App* sub = app.add_subcommand("preview", "Render the base mesh with its baked maps (window, or headless to PNG)");
   sub->add_option("base", args->base, "Base mesh with UVs");
   sub->add_option("--maps", args->maps, "Folder written by meso bake (displacement.exr, normal_ts.png)");
-  sub->add_option("--streams", args->streams, "Folder of meso streams outputs (sdf.exr for sphere-tracing, cone.exr for cone, relaxed-cone.exr for relaxed-cone); default: the --maps folder");
+  sub->add_option("--streams", args->streams, "Folder of meso streams outputs (sdf.exr for sphere-tracing, cone.exr for cone, relaxed-cone.exr for relaxed-cone, pyramid.exr for pyramid); default: the --maps folder");
   CLI::Option* method_option = sub->add_option(
       "--method", args->options.method,
       "Displacement method (see --list-methods); with --compare a comma-separated list or 'all' (the default: every "

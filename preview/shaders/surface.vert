@@ -9,6 +9,10 @@ layout(location = 3) in vec4 in_tangent;
 layout(location = 4) in vec2 in_uv_scale;
 
 uniform mat4 u_view_projection;
+// An affine map of normalised device x and y after the projection: (scale x, offset x,
+// scale y, offset y); identity (1, 0, 1, 0) except for DIG-DM's grid pass, which renders the
+// rays of every 4th pixel into a small target (dig.glsl).
+uniform vec4 u_ndc_transform;
 
 out vec3 v_position;
 out vec3 v_normal;
@@ -25,4 +29,5 @@ void main() {
   v_uv = in_uv;
   v_uv_scale = in_uv_scale;
   gl_Position = u_view_projection * vec4(in_position, 1.0);
+  gl_Position.xy = gl_Position.xy * u_ndc_transform.xz + u_ndc_transform.yw * gl_Position.w;
 }

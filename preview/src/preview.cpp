@@ -26,7 +26,7 @@ void check_maps(const PreviewMaps& maps, const std::string& method) {
   const Image* stream = stream_for(maps, method);
   if (stream && stream->empty()) {
     const std::string file = required_stream(method);
-    const std::string what = method == "sphere-tracing" ? "the distance field " : "the cone map ";
+    const std::string what = method == "sphere-tracing" ? "the distance field " : method == "pyramid" ? "the max pyramid " : "the cone map ";
     throw UsageError("method " + method + " needs " + what + file + " (meso streams " + file.substr(0, file.size() - 4) +
                      ", then --streams DIR)");
   }
@@ -156,7 +156,17 @@ Image HeadlessPreview::render(const PreviewOptions& o, Image* fetches) {
   impl_->draw(o);
   glFinish();
   Image out = impl_->target->read(0, 4);
-  if (fetches) *fetches = impl_->target->read(1, 2);
+  if (fetches) {
+    *fetches = impl_->target->read(1, 2);
+    // Per-vertex methods fetch in the vertex stages: their count spread evenly over the
+    // mesh's pixels.
+    const double vertex_fetches = impl_->renderer->vertex_stage_fetches();
+    size_t covered = 0;
+    for (size_t i = 0; i < fetches->texel_count(); ++i) covered += fetches->pixels[2 * i + 1] > 0.5f;
+    if (vertex_fetches > 0 && covered > 0)
+      for (size_t i = 0; i < fetches->texel_count(); ++i)
+        if (fetches->pixels[2 * i + 1] > 0.5f) fetches->pixels[2 * i] += static_cast<float>(vertex_fetches / static_cast<double>(covered));
+  }
   if (glGetError() != GL_NO_ERROR) throw InternalError("OpenGL reported an error while rendering");
   out.metadata["method"] = o.method;
   out.metadata["iterations"] = o.iterations;

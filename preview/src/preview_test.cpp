@@ -5,6 +5,7 @@
 #include "meso/core/error.hpp"
 #include "meso/streams/cone_map.hpp"
 #include "meso/streams/distance_field.hpp"
+#include "meso/streams/pyramid.hpp"
 #include "renderer.hpp"
 #include "test_support.hpp"
 
@@ -36,13 +37,22 @@ PreviewMaps maps_with_height(float (*height)(float u)) {
   return maps;
 }
 
-// Adds the cone maps of the displacement (as meso streams cone / relaxed-cone make them).
+// pyramid.exr's level 0 as meso streams pyramid writes it.
+Image pyramid_image(const HeightField& field) {
+  Image level0 = footprint_min_max(field);
+  level0.metadata = height_field_metadata(field);
+  return level0;
+}
+
+// Adds the cone maps and the max pyramid of the displacement (as meso streams cone /
+// relaxed-cone / pyramid make them).
 void add_cone_maps(PreviewMaps& maps, Border border) {
   const HeightField field = make_height_field(maps.displacement, border);
   maps.cone = build_cone_map(field, ConeMapOptions{});
   ConeMapOptions relaxed;
   relaxed.kind = ConeKind::relaxed;
   maps.relaxed_cone = build_cone_map(field, relaxed);
+  maps.pyramid = pyramid_image(field);
 }
 
 // 65 x 65 pixels: the centre pixel's ray goes exactly through the look-at point, the centre
@@ -61,7 +71,7 @@ TEST(Preview, ConstantHeightShiftsTheVisiblePointByHTanTheta) {
   const Mesh quad = test::make_grid(1, 1);
   PreviewMaps maps = maps_with_height([](float) { return 0.05f; });
   add_cone_maps(maps, Border::clamp);  // a flat field: height scale 0
-  for (const char* method : {"parallax", "iterative-parallax", "steep", "relief", "pom", "cone", "relaxed-cone"}) {
+  for (const char* method : {"parallax", "iterative-parallax", "steep", "relief", "pom", "cone", "relaxed-cone", "pyramid", "dig"}) {
     for (float angle : {0.0f, 30.0f, 60.0f}) {
       const Image img = render_headless(quad, maps, centre_uv_options(method, angle));
       const double expect_u = 0.5 + 0.05 * std::tan(angle * kPi / 180.0);
@@ -98,7 +108,7 @@ TEST(Preview, SafeAndRefiningMethodsFindTheCrossingOfALinearRamp) {
   const double a = 50.0 * kPi / 180.0, k = 0.1;
   const double dx = -std::sin(a), dz = -std::cos(a);
   const double expect = 0.5 + dx * (0.5 * k / (dz - k * dx));
-  for (const auto& [method, tolerance] : {std::pair<const char*, double>{"relief", 2e-4}, {"pom", 2e-4}, {"cone", 2e-4}, {"relaxed-cone", 2e-4}, {"sphere-tracing", 5e-4}}) {
+  for (const auto& [method, tolerance] : {std::pair<const char*, double>{"relief", 2e-4}, {"pom", 2e-4}, {"cone", 2e-4}, {"relaxed-cone", 2e-4}, {"pyramid", 2e-4}, {"dig", 2e-4}, {"sphere-tracing", 5e-4}}) {
     PreviewOptions opt = centre_uv_options(method, 50.0f);
     opt.iterations = 128;
     const Image img = render_headless(quad, maps, opt);
@@ -156,9 +166,19 @@ TEST(Preview, EveryMethodIsStableStraightOnAndGrazing) {
 TEST(Preview, MethodsNeedTheirStreams) {
   const Mesh quad = test::make_grid(1, 1);
   PreviewMaps maps = maps_with_height([](float u) { return 0.1f * u; });
-  for (const char* method : {"sphere-tracing", "cone", "relaxed-cone"}) {
+  for (const char* method : {"sphere-tracing", "cone", "relaxed-cone", "pyramid"}) {
     EXPECT_THROW(render_headless(quad, maps, centre_uv_options(method, 30.0f)), UsageError) << method;
   }
+  EXPECT_EQ(required_stream("pyramid"), "pyramid.exr");
+  // A pyramid of another height map is refused; this map's renders.
+  const HeightField own = make_height_field(maps.displacement, Border::clamp);
+  Image doubled = maps.displacement;
+  for (float& v : doubled.pixels) v *= 2.0f;
+  EXPECT_THROW(check_pyramid_matches(pyramid_image(make_height_field(doubled, Border::clamp)), maps.displacement, "pyramid.exr"), InputError);
+  EXPECT_THROW(check_stream_matches("pyramid", maps.cone, maps.displacement, "pyramid.exr"), InputError);
+  maps.pyramid = pyramid_image(own);
+  EXPECT_NO_THROW(render_headless(quad, maps, centre_uv_options("pyramid", 30.0f)));
+  maps.pyramid = Image();
   EXPECT_EQ(required_stream("cone"), "cone.exr");
   EXPECT_EQ(required_stream("relaxed-cone"), "relaxed-cone.exr");
   EXPECT_EQ(required_stream("sphere-tracing"), "sdf.exr");
@@ -247,7 +267,7 @@ Agreement agreement(const Image& a, const Image& b, int channels, double toleran
 // clamp rule the cone methods keep the point where a ray leaves the map (their cones say
 // nothing beyond it) while relief mapping goes on over the clamped surface: pixels whose
 // reference point lies off the map are not compared.
-TEST(Preview, ConeSteppingAgreesWithADenseReliefSearch) {
+TEST(Preview, ConeAndPyramidTracersAgreeWithADenseReliefSearch) {
   const Mesh quad = test::make_grid(1, 1);
   for (ConeScene scene : {ConeScene::rough, ConeScene::plateau}) {
     for (Border border : {Border::clamp, Border::wrap}) {
@@ -261,7 +281,7 @@ TEST(Preview, ConeSteppingAgreesWithADenseReliefSearch) {
           const bool uv = shade == PreviewShade::uv;
           if (!uv && scene == ConeScene::plateau) continue;  // two heights only: the uv is the finer test
           const Image reference = uv ? reference_uv : render_headless(quad, maps, view_options("relief", angle, 35.0f, 2048, shade));
-          for (const char* method : {"cone", "relaxed-cone"}) {
+          for (const char* method : {"cone", "relaxed-cone", "pyramid"}) {
             const Image img = render_headless(quad, maps, view_options(method, angle, 35.0f, 256, shade));
             // uv: a hundredth of a texel; height: a thousandth of the relief's range (measured
             // on llvmpipe: at most 4e-5 texel apart).
@@ -309,13 +329,15 @@ std::array<double, 16> inverse(const std::array<float, 16>& m) {
 // The shader runs trace_cone_map's algorithm: through every pixel of the unit quad
 // (UV = xy, frame = the axes), rebuild the view ray in double, trace it on the CPU from where
 // it enters the top of the height volume and compare the visible points.
-TEST(Preview, ConeSteppingMatchesTheReferenceTracer) {
+TEST(Preview, ConeAndPyramidTracersMatchTheCpuTracers) {
   const Mesh quad = test::make_grid(1, 1);
   for (const auto& [scene, border] : {std::pair{ConeScene::rough, Border::clamp}, std::pair{ConeScene::rough, Border::wrap},
                                       std::pair{ConeScene::plateau, Border::clamp}}) {
     const PreviewMaps maps = cone_maps(scene, border);
     const HeightField field = make_height_field(maps.displacement, border);
-    for (const auto& [method, kind] : {std::pair<const char*, ConeKind>{"cone", ConeKind::conservative}, {"relaxed-cone", ConeKind::relaxed}}) {
+    const MinMaxPyramid pyramid = min_max_pyramid_from_level0(maps.pyramid);
+    for (const std::string method : {"cone", "relaxed-cone", "pyramid"}) {
+      const ConeKind kind = method == "relaxed-cone" ? ConeKind::relaxed : ConeKind::conservative;
       const Image& cone = kind == ConeKind::relaxed ? maps.relaxed_cone : maps.cone;
       const PreviewOptions o = view_options(method, 55.0f, 35.0f, 512, PreviewShade::uv);
       const Image img = render_headless(quad, maps, o);
@@ -351,7 +373,7 @@ TEST(Preview, ConeSteppingMatchesTheReferenceTracer) {
           ray.x = (u0 + v[0] * s_top) * 64;
           ray.y = (1 - (v0 + v[1] * s_top)) * 64;
           ray.z = 1;
-          const HeightHit hit = trace_cone_map(field, cone, kind, ray);
+          const HeightHit hit = method == "pyramid" ? trace_min_max_pyramid(field, pyramid, ray) : trace_cone_map(field, cone, kind, ray);
           if (!hit.hit) continue;
           ++hits;
           const double s = s_top + hit.t;
@@ -359,7 +381,7 @@ TEST(Preview, ConeSteppingMatchesTheReferenceTracer) {
           ++a.pixels;
           a.within += std::max(std::abs(du), std::abs(dv)) <= 0.01 / 64;
         }
-      std::printf("%s %s %s: %zu of %zu traced pixels within 0.01 texel of the CPU tracer (%.4f)\n", method,
+      std::printf("%s %s %s: %zu of %zu traced pixels within 0.01 texel of the CPU tracer (%.4f)\n", method.c_str(),
                   scene == ConeScene::plateau ? "plateau" : "rough", border_name(border), a.within, a.pixels, a.fraction());
       EXPECT_GT(hits, 96u * 96u / 4) << method;
       EXPECT_GE(a.fraction(), 0.995) << method << " " << border_name(border);
@@ -373,7 +395,7 @@ TEST(Preview, ConeSteppingDoesNotDependOnAGenerousBudget) {
   const Mesh quad = test::make_grid(1, 1);
   const PreviewMaps maps = cone_maps(ConeScene::plateau, Border::clamp);
   std::array<double, 2> converged_at_8{};
-  for (const char* method : {"cone", "relaxed-cone"}) {
+  for (const char* method : {"cone", "relaxed-cone", "pyramid"}) {
     const Image a = render_headless(quad, maps, view_options(method, 70.0f, 35.0f, 256, PreviewShade::uv));
     const Image b = render_headless(quad, maps, view_options(method, 70.0f, 35.0f, 4096, PreviewShade::uv));
     const Agreement same = agreement(a, b, 2, 0.0);
@@ -384,9 +406,44 @@ TEST(Preview, ConeSteppingDoesNotDependOnAGenerousBudget) {
     const double f = agreement(starved, b, 2, 0.0).fraction();
     std::printf("%s: %.4f of the pixels have converged after 8 passes\n", method, f);
     EXPECT_LT(f, 0.97) << method;
-    converged_at_8[std::string(method) == "cone" ? 0 : 1] = f;
+    if (std::string(method) != "pyramid") converged_at_8[std::string(method) == "cone" ? 0 : 1] = f;
   }
   EXPECT_GT(converged_at_8[1], converged_at_8[0] + 0.03) << "relaxed cones take longer steps";
+}
+
+// DIG-DM bounds each pixel's search by its block's corner rays: on fields with relief a few
+// texels across it agrees with the dense search almost everywhere (it is not a safe method:
+// features between corner rays can be missed), and its fetches, the grid pass's included
+// (amortised over each block), stay below POM's at the same linear step.
+TEST(Preview, DigAgreesWithADenseSearchAndFetchesLessThanPom) {
+  const Mesh quad = test::make_grid(1, 1);
+  for (ConeScene scene : {ConeScene::rough, ConeScene::plateau}) {
+    const PreviewMaps maps = cone_maps(scene, Border::clamp);
+    HeadlessPreview preview(quad, maps);
+    for (float angle : {30.0f, 65.0f}) {
+      const Image reference = preview.render(view_options("relief", angle, 35.0f, 2048, PreviewShade::uv));
+      std::array<double, 2> mean{};
+      for (int k = 0; k < 2; ++k) {
+        Image fetches;
+        const Image img = preview.render(view_options(k ? "pom" : "dig", angle, 35.0f, 64, PreviewShade::uv), &fetches);
+        double sum = 0;
+        size_t n = 0;
+        for (size_t i = 0; i < fetches.texel_count(); ++i)
+          if (fetches.pixels[2 * i + 1] > 0.5f) {
+            sum += fetches.pixels[2 * i];
+            ++n;
+          }
+        mean[static_cast<size_t>(k)] = sum / static_cast<double>(std::max<size_t>(n, 1));
+        const Agreement a = agreement(img, reference, 2, 0.5 / 64);
+        std::printf("%s %s %.0f deg: %.4f of pixels within half a texel of the dense search, %.1f fetches per pixel\n",
+                    k ? "pom" : "dig", scene == ConeScene::plateau ? "plateau" : "rough", static_cast<double>(angle), a.fraction(),
+                    mean[static_cast<size_t>(k)]);
+        EXPECT_GE(a.fraction(), 0.96) << (k ? "pom" : "dig") << " at " << angle;
+      }
+      EXPECT_LT(mean[0], 0.8 * mean[1]) << "dig against pom at " << angle;
+      EXPECT_GT(mean[0], 8.0) << "the binary search alone takes 8";
+    }
+  }
 }
 
 TEST(Preview, PomFindsTheExactCrossingOfALinearRamp) {
@@ -568,7 +625,7 @@ TEST(Measure, SearchMethodsAgreeWithTheReference) {
   const PreviewMaps maps = rough_maps_with_sdf();
   for (float angle : {30.0f, 45.0f}) {
     CompareOptions o;
-    o.methods = {"parallax", "relief", "pom", "cone", "relaxed-cone", "sphere-tracing"};
+    o.methods = {"mesh", "tessellation", "parallax", "relief", "pom", "cone", "relaxed-cone", "pyramid", "sphere-tracing", "dig"};
     o.view.width = o.view.height = 96;
     o.view.camera.view_angle = angle;
     o.view.camera.azimuth = 35.0f;
@@ -587,7 +644,7 @@ TEST(Measure, SearchMethodsAgreeWithTheReference) {
       EXPECT_TRUE(std::isfinite(m.ms) && m.ms > 0) << m.name;
       EXPECT_EQ(m.fetches.width, 96);
       EXPECT_EQ(m.fetches.channels, 2);
-      EXPECT_GE(m.mean_iterations, 1.0) << m.name;
+      EXPECT_GE(m.mean_iterations, m.name == "mesh" || m.name == "tessellation" ? 0.1 : 1.0) << m.name;  // per vertex: amortised
       EXPECT_GE(m.p99_iterations, m.mean_iterations) << m.name;
       EXPECT_GE(m.max_iterations, m.p99_iterations) << m.name;
       if (m.name == "parallax") {
@@ -595,8 +652,11 @@ TEST(Measure, SearchMethodsAgreeWithTheReference) {
         EXPECT_GT(m.wrong_hit_fraction, 0.03) << "at " << angle;
         continue;
       }
-      EXPECT_LE(m.wrong_hit_fraction, 0.002) << m.name << " at " << angle;
-      EXPECT_LT(m.rmse, 0.01) << m.name;  // the normal map is flat: lit images differ only where coverage does
+      // Per-vertex methods at about a texel per segment (the base quad's edges are 64 and 90
+      // texels long; GL allows 64 segments) and DIG-DM (not a safe method) miss a little.
+      const bool approximate = m.name == "mesh" || m.name == "tessellation" || m.name == "dig";
+      EXPECT_LE(m.wrong_hit_fraction, approximate ? 0.03 : 0.002) << m.name << " at " << angle;
+      EXPECT_LT(m.rmse, approximate ? 0.03 : 0.01) << m.name;  // the normal map is flat: lit images differ only where coverage does
     }
   }
 }
@@ -656,11 +716,69 @@ TEST(Measure, FetchCounts) {
     ASSERT_TRUE(d == 0.0f || d == 8.0f) << d;
   }
   const double pom_1024 = mean_fetches("pom", 1024);
-  for (const char* method : {"cone", "relaxed-cone", "sphere-tracing"}) {
+  for (const char* method : {"cone", "relaxed-cone", "pyramid", "sphere-tracing"}) {
     const double a = mean_fetches(method, 256), b = mean_fetches(method, 1024);
     std::printf("%s: mean fetches %.1f at 256 and %.1f at 1024 passes (pom at 1024 steps: %.1f)\n", method, a, b, pom_1024);
     EXPECT_EQ(a, b) << method << " stops when it has found the surface";
     EXPECT_LT(b, pom_1024 / 4) << method;
+  }
+}
+
+// The per-vertex methods fetch in the vertex stages: one height per generated vertex (plus
+// the adaptive edge tests' samples), spread over the mesh's pixels. The brute-force mesh
+// generates a vertex per texel whatever the budget; adaptive tessellation no more vertices
+// than that, fewer with a smaller budget, and none beyond the corners on a flat map.
+TEST(Measure, PerVertexFetchCounts) {
+  const Mesh quad = test::make_grid(1, 1);
+  const PreviewMaps maps = rough_maps_with_sdf();
+  HeadlessPreview gpu(quad, maps);
+  auto total = [&](const std::string& method, int iterations) {
+    Image fetches;
+    gpu.render(view_options(method, 45.0f, 35.0f, iterations, PreviewShade::uv), &fetches);
+    double sum = 0;
+    for (size_t i = 0; i < fetches.texel_count(); ++i) sum += fetches.pixels[2 * i];
+    return sum;
+  };
+  const double mesh = total("mesh", 4), mesh_64 = total("mesh", 64), tess_4 = total("tessellation", 4), tess_64 = total("tessellation", 64);
+  std::printf("vertex fetches: mesh %.0f, tessellation %.0f at 4 and %.0f at 64 segments per edge\n", mesh, tess_4, tess_64);
+  // Two triangles at 64 segments per edge: at least 2 x (64 + 1)(64 + 2) / 2 vertices (the
+  // counter counts evaluations: a vertex shared by several triangles may be evaluated again,
+  // at most once per triangle corner).
+  EXPECT_GE(mesh, 2 * 65 * 66 / 2);
+  EXPECT_LE(mesh, 2 * 64 * 64 * 3);
+  EXPECT_EQ(mesh, mesh_64);
+  EXPECT_LT(tess_4, tess_64 / 4);
+  EXPECT_LE(tess_64, mesh + 2 * 3 * 9 + 1);  // + the edge tests' samples
+  const PreviewMaps flat = maps_with_height([](float) { return 0.05f; });
+  HeadlessPreview flat_gpu(quad, flat);
+  Image fetches;
+  flat_gpu.render(view_options("tessellation", 45.0f, 35.0f, 64, PreviewShade::uv), &fetches);
+  double sum = 0;
+  for (size_t i = 0; i < fetches.texel_count(); ++i) sum += fetches.pixels[2 * i];
+  EXPECT_NEAR(sum, 2 * 3 + 2 * 3 * 9, 0.5) << "a flat map needs no vertex but the corners";
+}
+
+// The tessellated surface is watertight: seen straight on, every pixel inside the quad is
+// covered, whatever the heights do along the shared diagonal.
+TEST(Measure, TessellationIsCrackFree) {
+  const Mesh grid = test::make_grid(3, 3);
+  const PreviewMaps maps = rough_maps_with_sdf();
+  for (const char* method : {"mesh", "tessellation"}) {
+    PreviewOptions o = view_options(method, 0.0f, 0.0f, 64, PreviewShade::uv);
+    o.width = o.height = 160;
+    o.camera.zoom = 1.4f;
+    const Image img = render_headless(grid, maps, o);
+    size_t holes = 0, covered = 0;
+    for (int y = 1; y + 1 < img.height; ++y)
+      for (int x = 1; x + 1 < img.width; ++x) {
+        const bool on = img.at(x, y, 3) > 0.5f;
+        covered += on;
+        // A hole: a pixel off the mesh between covered pixels on both sides, in a row or a column.
+        if (!on && ((img.at(x - 1, y, 3) > 0.5f && img.at(x + 1, y, 3) > 0.5f) || (img.at(x, y - 1, 3) > 0.5f && img.at(x, y + 1, 3) > 0.5f)))
+          ++holes;
+      }
+    EXPECT_GT(covered, img.texel_count() / 3) << method;
+    EXPECT_EQ(holes, 0u) << method;
   }
 }
 
@@ -671,18 +789,19 @@ TEST(Measure, ComparisonReport) {
   o.view.width = 40;
   o.view.height = 32;
   o.repetitions = 3;
-  // Without --method: every method whose stream is there (none is: the eight without one).
+  // Without --method: every method whose stream is there (none is: the eleven without one).
   Comparison c = compare_methods(quad, maps, o);
-  ASSERT_EQ(c.methods.size(), 8u);
-  EXPECT_EQ(c.methods.front().name, "bump");
-  EXPECT_EQ(c.methods.back().name, "pom");
+  ASSERT_EQ(c.methods.size(), 11u);
+  EXPECT_EQ(c.methods.front().name, "mesh");
+  EXPECT_EQ(c.methods[9].name, "pom");
+  EXPECT_EQ(c.methods.back().name, "dig");
   const auto json = nlohmann::json::parse(comparison_json(c));
   for (const char* key : {"triangles", "ms", "max_edge_texels", "build_ms"}) EXPECT_TRUE(json["reference"].contains(key)) << key;
   EXPECT_EQ(json["reference"]["triangles"].get<size_t>(), c.reference_triangles);
   for (const char* key : {"width", "height", "view_angle", "azimuth", "zoom", "iterations", "uv_tolerance_texels"})
     EXPECT_TRUE(json.contains(key)) << key;
-  ASSERT_EQ(json["methods"].size(), 8u);
-  for (size_t i = 0; i < 8; ++i) {
+  ASSERT_EQ(json["methods"].size(), 11u);
+  for (size_t i = 0; i < 11; ++i) {
     const auto& m = json["methods"][i];
     for (const char* key : {"name", "pixels", "wrong_hit_fraction", "rmse", "psnr", "mean_iterations", "p99_iterations", "max_iterations", "ms"})
       EXPECT_TRUE(m.contains(key)) << key;
@@ -707,6 +826,7 @@ TEST(Measure, ComparisonReport) {
   EXPECT_EQ(heat.at(1, 0, 3), 1.0f);
   EXPECT_EQ(heat.at(2, 0, 3), 0.0f);
 }
+
 
 }  // namespace
 }  // namespace meso

@@ -3,10 +3,12 @@
 #include "meso/bake/tangent_frame.hpp"
 #include "meso/core/error.hpp"
 #include "meso/core/mesh_arrays.hpp"
+#include "meso/streams/pyramid.hpp"
 #include "sampling.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <initializer_list>
 #include <string>
 #include <vector>
 
@@ -14,13 +16,23 @@ namespace meso {
 
 namespace shaders {
 extern const char* const surface_vert;
+extern const char* const surface_common_glsl;
+extern const char* const footprint_glsl;
+extern const char* const cone_stepping_glsl;
+extern const char* const pyramid_glsl;
+extern const char* const sphere_tracing_glsl;
+extern const char* const dig_glsl;
+extern const char* const tess_vert;
+extern const char* const tess_tesc;
+extern const char* const tess_tese;
 extern const char* const surface_frag;
 }  // namespace shaders
 
 const std::vector<std::string>& preview_methods() {
   // The order is the shader's method numbering (surface.frag).
-  static const std::vector<std::string> names{"bump",   "parallax", "offset-limited", "slope",         "iterative-parallax", "steep",
-                                              "relief", "pom",      "cone",           "relaxed-cone", "sphere-tracing"};
+  static const std::vector<std::string> names{"mesh",         "tessellation", "bump",  "parallax", "offset-limited",
+                                              "slope",        "iterative-parallax", "steep", "relief", "pom",
+                                              "cone",         "relaxed-cone", "pyramid", "sphere-tracing", "dig"};
   return names;
 }
 
@@ -57,7 +69,7 @@ std::string string_attribute(const Image& img, const char* key) {
 }  // namespace
 
 bool maps_tile(const PreviewMaps& maps) {
-  for (const Image* stream : {&maps.sdf, &maps.cone, &maps.relaxed_cone})
+  for (const Image* stream : {&maps.sdf, &maps.cone, &maps.relaxed_cone, &maps.pyramid})
     if (!stream->empty() && string_attribute(*stream, "border") == "wrap") return true;
   return false;
 }
@@ -84,16 +96,25 @@ void check_cone_matches(const Image& cone, const Image& displacement, const std:
   check_height_range(cone, displacement, name, producer);
 }
 
+void check_pyramid_matches(const Image& pyramid, const Image& displacement, const std::string& name) {
+  if (pyramid.channels != 2) throw InputError(name, "needs 2 channels (min, max): is it meso streams pyramid's output?");
+  if (pyramid.width != displacement.width || pyramid.height != displacement.height)
+    throw InputError(name, "its size does not match displacement.exr (made from another height map?)");
+  check_height_range(pyramid, displacement, name, "meso streams pyramid");
+}
+
 void check_stream_matches(const std::string& method, const Image& stream, const Image& displacement, const std::string& name) {
   if (method == "sphere-tracing") check_sdf_matches(stream, displacement, name);
   if (method == "cone") check_cone_matches(stream, displacement, "conservative", name);
   if (method == "relaxed-cone") check_cone_matches(stream, displacement, "relaxed", name);
+  if (method == "pyramid") check_pyramid_matches(stream, displacement, name);
 }
 
 std::string required_stream(const std::string& method) {
   if (method == "sphere-tracing") return "sdf.exr";
   if (method == "cone") return "cone.exr";
   if (method == "relaxed-cone") return "relaxed-cone.exr";
+  if (method == "pyramid") return "pyramid.exr";
   return "";
 }
 
@@ -101,6 +122,7 @@ const Image* stream_for(const PreviewMaps& maps, const std::string& method) {
   if (method == "sphere-tracing") return &maps.sdf;
   if (method == "cone") return &maps.cone;
   if (method == "relaxed-cone") return &maps.relaxed_cone;
+  if (method == "pyramid") return &maps.pyramid;
   return nullptr;
 }
 
@@ -117,9 +139,11 @@ int method_index(const std::string& name) {
 
 namespace {
 
-GLuint compile(GLenum type, const char* src) {
+// One shader stage from its pieces, concatenated in order (the first starts with #version).
+GLuint compile(GLenum type, std::initializer_list<const char*> pieces) {
+  const std::vector<const char*> src(pieces);
   const GLuint s = glCreateShader(type);
-  glShaderSource(s, 1, &src, nullptr);
+  glShaderSource(s, static_cast<GLsizei>(src.size()), src.data(), nullptr);
   glCompileShader(s);
   GLint ok = 0;
   glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
@@ -129,6 +153,22 @@ GLuint compile(GLenum type, const char* src) {
     throw InternalError(std::string("preview shader does not compile: ") + log);
   }
   return s;
+}
+
+// Links the compiled stages into a program (and deletes the stages).
+GLuint link(std::initializer_list<GLuint> stages) {
+  const GLuint program = glCreateProgram();
+  for (GLuint s : stages) glAttachShader(program, s);
+  glLinkProgram(program);
+  for (GLuint s : stages) glDeleteShader(s);
+  GLint ok = 0;
+  glGetProgramiv(program, GL_LINK_STATUS, &ok);
+  if (!ok) {
+    char log[4096];
+    glGetProgramInfoLog(program, sizeof log, nullptr, log);
+    throw InternalError(std::string("preview shaders do not link: ") + log);
+  }
+  return program;
 }
 
 GLuint upload_texture(const Image& img, int channels) {
@@ -180,17 +220,19 @@ SurfaceRenderer::SurfaceRenderer(const Mesh& base, const PreviewMaps& maps) : ba
   }
   index_count_ = static_cast<GLsizei>(split.triangles.size());
 
-  const GLuint vs = compile(GL_VERTEX_SHADER, shaders::surface_vert);
-  const GLuint fs = compile(GL_FRAGMENT_SHADER, shaders::surface_frag);
-  program_ = glCreateProgram();
-  glAttachShader(program_, vs);
-  glAttachShader(program_, fs);
-  glLinkProgram(program_);
-  glDeleteShader(vs);
-  glDeleteShader(fs);
-  GLint ok = 0;
-  glGetProgramiv(program_, GL_LINK_STATUS, &ok);
-  if (!ok) throw InternalError("preview shaders do not link");
+  // Per-pixel methods: surface.vert + the fragment pieces; per-vertex methods (mesh,
+  // tessellation): the tessellation stages + the same fragment pieces.
+  auto fragment = [] {
+    return compile(GL_FRAGMENT_SHADER, {shaders::surface_common_glsl, shaders::footprint_glsl, shaders::cone_stepping_glsl,
+                                        shaders::pyramid_glsl, shaders::sphere_tracing_glsl, shaders::dig_glsl, shaders::surface_frag});
+  };
+  program_ = link({compile(GL_VERTEX_SHADER, {shaders::surface_vert}), fragment()});
+  tess_program_ = link({compile(GL_VERTEX_SHADER, {shaders::tess_vert}), compile(GL_TESS_CONTROL_SHADER, {shaders::tess_tesc}),
+                        compile(GL_TESS_EVALUATION_SHADER, {shaders::tess_tese}), fragment()});
+  glGenBuffers(1, &vertex_work_);
+  glBindBuffer(GL_SHADER_STORAGE_BUFFER, vertex_work_);
+  const GLuint zero = 0;
+  glBufferData(GL_SHADER_STORAGE_BUFFER, sizeof zero, &zero, GL_DYNAMIC_READ);
 
   glGenVertexArrays(1, &vao_);
   glBindVertexArray(vao_);
@@ -216,6 +258,7 @@ SurfaceRenderer::SurfaceRenderer(const Mesh& base, const PreviewMaps& maps) : ba
   if (!maps.sdf.empty()) upload_sdf(maps.sdf, maps.displacement);
   if (!maps.cone.empty()) upload_cone(0, maps.cone, maps.displacement);
   if (!maps.relaxed_cone.empty()) upload_cone(1, maps.relaxed_cone, maps.displacement);
+  if (!maps.pyramid.empty()) upload_pyramid(maps.pyramid, maps.displacement);
   const auto& px = maps.displacement.pixels;
   if (!px.empty()) {
     const auto [lo, hi] = std::minmax_element(px.begin(), px.end());
@@ -273,7 +316,88 @@ void SurfaceRenderer::upload_cone(int k, const Image& cone, const Image& displac
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
 }
 
+void SurfaceRenderer::upload_pyramid(const Image& level0, const Image& displacement) {
+  check_pyramid_matches(level0, displacement, "pyramid.exr");
+  pyramid_scale_ = stream_number(level0, "height_scale", "pyramid.exr", "meso streams pyramid");
+  pyramid_bias_ = stream_number(level0, "height_bias", "pyramid.exr", "meso streams pyramid");
+  pyramid_wrap_ = string_attribute(level0, "border") == "wrap";
+  const MinMaxPyramid pyramid = min_max_pyramid_from_level0(level0);
+  // The levels' maxima side by side in one single-level texture: level 0 at the left, the
+  // coarser ones stacked in a column to its right. (llvmpipe's texelFetch does not take a level
+  // that differs between the fragments of a SIMD batch, which a traversal needs.)
+  const int levels = std::min(static_cast<int>(pyramid.levels.size()), kMaxPyramidLevels);
+  const int w0 = level0.width, h0 = level0.height;
+  const int atlas_w = w0 + (levels > 1 ? pyramid.levels[1].width : 0);
+  int column = 0;
+  pyramid_offset_.assign(static_cast<size_t>(2 * levels), 0);
+  pyramid_size_.assign(static_cast<size_t>(2 * levels), 0);
+  for (int l = 0; l < levels; ++l) {
+    const Image& img = pyramid.levels[static_cast<size_t>(l)];
+    pyramid_offset_[static_cast<size_t>(2 * l)] = l == 0 ? 0 : w0;
+    pyramid_offset_[static_cast<size_t>(2 * l + 1)] = l == 0 ? 0 : column;
+    pyramid_size_[static_cast<size_t>(2 * l)] = img.width;
+    pyramid_size_[static_cast<size_t>(2 * l + 1)] = img.height;
+    if (l > 0) column += img.height;
+  }
+  const int atlas_h = std::max(h0, column);
+  Image atlas(atlas_w, atlas_h, 1, 0.0f);  // rows from the top, as every Image
+  for (int l = 0; l < levels; ++l) {
+    const Image& img = pyramid.levels[static_cast<size_t>(l)];
+    const int ox = pyramid_offset_[static_cast<size_t>(2 * l)], oy = pyramid_offset_[static_cast<size_t>(2 * l + 1)];
+    for (int y = 0; y < img.height; ++y)
+      for (int x = 0; x < img.width; ++x) atlas.at(ox + x, oy + y) = img.at(x, y, 1);
+  }
+  pyramid_levels_ = levels;
+  pyramid_tex_ = upload_texture(atlas, 1);  // flipped: GL row = atlas_h - 1 - row
+  // Read with texelFetch only: a filtered maximum bounds nothing.
+  glBindTexture(GL_TEXTURE_2D, pyramid_tex_);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+}
+
+void SurfaceRenderer::ensure_dig_target(int width, int height) {
+  if (dig_fbo_ && dig_width_ == width && dig_height_ == height) return;
+  if (!dig_fbo_) {
+    glGenFramebuffers(1, &dig_fbo_);
+    glGenTextures(1, &dig_tex_);
+    glGenRenderbuffers(1, &dig_depth_);
+  }
+  dig_width_ = width;
+  dig_height_ = height;
+  glBindTexture(GL_TEXTURE_2D, dig_tex_);
+  glTexImage2D(GL_TEXTURE_2D, 0, GL_RG32F, width, height, 0, GL_RG, GL_FLOAT, nullptr);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  glBindRenderbuffer(GL_RENDERBUFFER, dig_depth_);
+  glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT32F, width, height);
+  GLint previous = 0;
+  glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &previous);
+  glBindFramebuffer(GL_FRAMEBUFFER, dig_fbo_);
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, dig_tex_, 0);
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, dig_depth_);
+  const GLenum buffers[1] = {GL_COLOR_ATTACHMENT0};
+  glDrawBuffers(1, buffers);
+  const bool complete = glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE;
+  glBindFramebuffer(GL_FRAMEBUFFER, static_cast<GLuint>(previous));
+  if (!complete) throw InternalError("OpenGL: the depth interval grid's float target is not supported");
+}
+
+double SurfaceRenderer::vertex_stage_fetches() const {
+  if (!last_per_vertex_) return 0;
+  GLuint count = 0;
+  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  glBindBuffer(GL_SHADER_STORAGE_BUFFER, vertex_work_);
+  glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, sizeof count, &count);
+  return count;
+}
+
 SurfaceRenderer::~SurfaceRenderer() {
+  glDeleteBuffers(1, &vertex_work_);
+  glDeleteProgram(tess_program_);
+  glDeleteFramebuffers(1, &dig_fbo_);
+  glDeleteTextures(1, &dig_tex_);
+  glDeleteRenderbuffers(1, &dig_depth_);
+  glDeleteTextures(1, &pyramid_tex_);
   glDeleteTextures(2, cone_tex_.data());
   glDeleteTextures(1, &sdf_tex_);
   glDeleteTextures(1, &height_tex_);
@@ -294,24 +418,31 @@ void SurfaceRenderer::draw(const PreviewOptions& o, int width, int height) {
   glDisable(GL_CULL_FACE);
   // The flat tangent sign comes from a triangle's first corner, the corner the baker uses.
   glProvokingVertex(GL_FIRST_VERTEX_CONVENTION);
-  glUseProgram(program_);
-  glUniformMatrix4fv(glGetUniformLocation(program_, "u_view_projection"), 1, GL_FALSE, pose.view_projection.data());
-  glUniform3f(glGetUniformLocation(program_, "u_eye"), pose.eye[0], pose.eye[1], pose.eye[2]);
-  glUniform3f(glGetUniformLocation(program_, "u_light"), pose.light[0], pose.light[1], pose.light[2]);
-  glUniform1i(glGetUniformLocation(program_, "u_method"), method_index(o.method));
-  glUniform1i(glGetUniformLocation(program_, "u_iterations"), o.iterations);
-  glUniform1i(glGetUniformLocation(program_, "u_shade"), static_cast<int>(o.shade));
-  glUniform1f(glGetUniformLocation(program_, "u_h_min"), h_min_);
-  glUniform1f(glGetUniformLocation(program_, "u_h_max"), h_max_);
+  const bool per_vertex = o.method == "mesh" || o.method == "tessellation";
+  const GLuint prog = per_vertex ? tess_program_ : program_;
+  glUseProgram(prog);
+  glUniformMatrix4fv(glGetUniformLocation(prog, "u_view_projection"), 1, GL_FALSE, pose.view_projection.data());
+  glUniform3f(glGetUniformLocation(prog, "u_eye"), pose.eye[0], pose.eye[1], pose.eye[2]);
+  glUniform3f(glGetUniformLocation(prog, "u_light"), pose.light[0], pose.light[1], pose.light[2]);
+  glUniform1i(glGetUniformLocation(prog, "u_method"), method_index(o.method));
+  glUniform1i(glGetUniformLocation(prog, "u_iterations"), o.iterations);
+  glUniform1i(glGetUniformLocation(prog, "u_shade"), static_cast<int>(o.shade));
+  glUniform1f(glGetUniformLocation(prog, "u_h_min"), h_min_);
+  glUniform1f(glGetUniformLocation(prog, "u_h_max"), h_max_);
   const int cone = o.method == "cone" ? 0 : o.method == "relaxed-cone" ? 1 : -1;
-  const bool stream_missing = o.method == "sphere-tracing" ? !sdf_tex_ : cone >= 0 && !cone_tex_[static_cast<size_t>(cone)];
+  const bool pyramid = o.method == "pyramid";
+  const bool stream_missing = o.method == "sphere-tracing" ? !sdf_tex_
+                              : pyramid                    ? !pyramid_tex_
+                                                           : cone >= 0 && !cone_tex_[static_cast<size_t>(cone)];
   if (stream_missing) throw UsageError("method " + o.method + " needs the stream " + required_stream(o.method) + " (meso streams)");
   // Streams and shaders agree on the border (height_field.hpp): a tiling field makes the
   // height and normal maps tile too. A method with a stream follows its stream; the others
   // tile when any loaded stream does.
   const bool wrap = o.method == "sphere-tracing" ? sdf_wrap_
+                    : pyramid                    ? pyramid_wrap_
                     : cone >= 0                  ? cone_wrap_[static_cast<size_t>(cone)]
-                                                 : (sdf_tex_ && sdf_wrap_) || (cone_tex_[0] && cone_wrap_[0]) || (cone_tex_[1] && cone_wrap_[1]);
+                                                 : (sdf_tex_ && sdf_wrap_) || (cone_tex_[0] && cone_wrap_[0]) ||
+                                      (cone_tex_[1] && cone_wrap_[1]) || (pyramid_tex_ && pyramid_wrap_);
   const GLint wrap_mode = wrap ? GL_REPEAT : GL_CLAMP_TO_EDGE;
   for (GLuint tex : {height_tex_, normal_tex_}) {
     glBindTexture(GL_TEXTURE_2D, tex);
@@ -320,28 +451,76 @@ void SurfaceRenderer::draw(const PreviewOptions& o, int width, int height) {
   }
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, height_tex_);
-  glUniform1i(glGetUniformLocation(program_, "u_height"), 0);
+  glUniform1i(glGetUniformLocation(prog, "u_height"), 0);
   glActiveTexture(GL_TEXTURE1);
   glBindTexture(GL_TEXTURE_2D, normal_tex_);
-  glUniform1i(glGetUniformLocation(program_, "u_normal"), 1);
+  glUniform1i(glGetUniformLocation(prog, "u_normal"), 1);
   glActiveTexture(GL_TEXTURE2);
   glBindTexture(GL_TEXTURE_3D, sdf_tex_);
-  glUniform1i(glGetUniformLocation(program_, "u_sdf"), 2);
-  glUniform1f(glGetUniformLocation(program_, "u_sdf_scale"), sdf_scale_);
-  glUniform1f(glGetUniformLocation(program_, "u_sdf_bias"), sdf_bias_);
-  glUniform1f(glGetUniformLocation(program_, "u_sdf_relief"), sdf_relief_);
-  glUniform1f(glGetUniformLocation(program_, "u_sdf_aspect"), sdf_aspect_);
-  glUniform1f(glGetUniformLocation(program_, "u_sdf_epsilon"), sdf_epsilon_);
-  glUniform1f(glGetUniformLocation(program_, "u_sdf_margin"), sdf_margin_);
+  glUniform1i(glGetUniformLocation(prog, "u_sdf"), 2);
+  glUniform1f(glGetUniformLocation(prog, "u_sdf_scale"), sdf_scale_);
+  glUniform1f(glGetUniformLocation(prog, "u_sdf_bias"), sdf_bias_);
+  glUniform1f(glGetUniformLocation(prog, "u_sdf_relief"), sdf_relief_);
+  glUniform1f(glGetUniformLocation(prog, "u_sdf_aspect"), sdf_aspect_);
+  glUniform1f(glGetUniformLocation(prog, "u_sdf_epsilon"), sdf_epsilon_);
+  glUniform1f(glGetUniformLocation(prog, "u_sdf_margin"), sdf_margin_);
   const size_t c = cone >= 0 ? static_cast<size_t>(cone) : 0;
   glActiveTexture(GL_TEXTURE3);
   glBindTexture(GL_TEXTURE_2D, cone_tex_[c]);
-  glUniform1i(glGetUniformLocation(program_, "u_cone"), 3);
-  glUniform1f(glGetUniformLocation(program_, "u_cone_scale"), cone_scale_[c]);
-  glUniform1f(glGetUniformLocation(program_, "u_cone_bias"), cone_bias_[c]);
-  glUniform1i(glGetUniformLocation(program_, "u_cone_wrap"), cone_wrap_[c] ? 1 : 0);
+  glUniform1i(glGetUniformLocation(prog, "u_cone"), 3);
+  glActiveTexture(GL_TEXTURE4);
+  glBindTexture(GL_TEXTURE_2D, pyramid_tex_);
+  glUniform1i(glGetUniformLocation(prog, "u_pyramid"), 4);
+  glUniform1i(glGetUniformLocation(prog, "u_pyramid_levels"), pyramid_levels_);
+  if (pyramid_levels_ > 0) {
+    glUniform2iv(glGetUniformLocation(prog, "u_pyramid_offset"), pyramid_levels_, pyramid_offset_.data());
+    glUniform2iv(glGetUniformLocation(prog, "u_pyramid_size"), pyramid_levels_, pyramid_size_.data());
+  }
+  // The method's stream: its normalisation and border.
+  glUniform1f(glGetUniformLocation(prog, "u_stream_scale"), pyramid ? pyramid_scale_ : cone_scale_[c]);
+  glUniform1f(glGetUniformLocation(prog, "u_stream_bias"), pyramid ? pyramid_bias_ : cone_bias_[c]);
+  glUniform1i(glGetUniformLocation(prog, "u_stream_wrap"), (pyramid ? pyramid_wrap_ : cone_wrap_[c]) ? 1 : 0);
+  const GLint ndc = glGetUniformLocation(prog, "u_ndc_transform");
+  glUniform4f(ndc, 1.0f, 0.0f, 1.0f, 0.0f);
   glBindVertexArray(vao_);
-  glDrawElements(GL_TRIANGLES, index_count_, GL_UNSIGNED_INT, nullptr);
+  if (o.method == "dig") {
+    // Pass 1 (dig.glsl): grid texel (i, j) holds the ray of pixel (4i, 4j), for the corners of
+    // every 4 x 4 block: (width - 1) / 4 + 2 corners across. Normalised device x of pixel
+    // 4i's centre, 2 (4i + 0.5) / width - 1, maps onto grid texel i's, 2 (i + 0.5) / grid - 1.
+    const int gw = (width - 1) / 4 + 2, gh = (height - 1) / 4 + 2;
+    ensure_dig_target(gw, gh);
+    GLint previous = 0;
+    glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &previous);
+    glBindFramebuffer(GL_FRAMEBUFFER, dig_fbo_);
+    glViewport(0, 0, gw, gh);
+    glClearColor(-1, 0, 0, 0);
+    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    const float w = static_cast<float>(width), h = static_cast<float>(height);
+    glUniform4f(ndc, w / (4.0f * static_cast<float>(gw)), (w + 3.0f) / (4.0f * static_cast<float>(gw)) - 1.0f,
+                h / (4.0f * static_cast<float>(gh)), (h + 3.0f) / (4.0f * static_cast<float>(gh)) - 1.0f);
+    glUniform1i(glGetUniformLocation(prog, "u_dig_pass"), 1);
+    glDrawElements(GL_TRIANGLES, index_count_, GL_UNSIGNED_INT, nullptr);
+    glBindFramebuffer(GL_FRAMEBUFFER, static_cast<GLuint>(previous));
+    glViewport(0, 0, width, height);
+    glUniform4f(ndc, 1.0f, 0.0f, 1.0f, 0.0f);
+    glActiveTexture(GL_TEXTURE5);
+    glBindTexture(GL_TEXTURE_2D, dig_tex_);
+    glUniform1i(glGetUniformLocation(prog, "u_dig"), 5);
+  }
+  glUniform1i(glGetUniformLocation(prog, "u_dig_pass"), 2);
+  if (per_vertex) {
+    glUniform1i(glGetUniformLocation(prog, "u_tess_mode"), o.method == "mesh" ? 0 : 1);
+    glUniform2f(glGetUniformLocation(prog, "u_viewport"), static_cast<float>(width), static_cast<float>(height));
+    const GLuint zero = 0;
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, vertex_work_);
+    glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, sizeof zero, &zero);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, vertex_work_);
+    glPatchParameteri(GL_PATCH_VERTICES, 3);
+    glDrawElements(GL_PATCHES, index_count_, GL_UNSIGNED_INT, nullptr);
+  } else {
+    glDrawElements(GL_TRIANGLES, index_count_, GL_UNSIGNED_INT, nullptr);
+  }
+  last_per_vertex_ = per_vertex;
   glBindVertexArray(0);
 }
 

@@ -9,6 +9,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 namespace meso {
 
@@ -37,9 +38,11 @@ Image footprint_min_max(const HeightField& f) {
   return level0;
 }
 
-MinMaxPyramid build_min_max_pyramid(const HeightField& f) {
+MinMaxPyramid build_min_max_pyramid(const HeightField& f) { return min_max_pyramid_from_level0(footprint_min_max(f)); }
+
+MinMaxPyramid min_max_pyramid_from_level0(Image level0) {
   MinMaxPyramid p;
-  p.levels.push_back(footprint_min_max(f));
+  p.levels.push_back(std::move(level0));
   while (p.levels.back().width > 1 || p.levels.back().height > 1) {
     const Image& fine = p.levels.back();
     const int fw = fine.width, fh = fine.height;

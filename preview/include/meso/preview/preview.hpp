@@ -24,10 +24,15 @@ struct PreviewMaps {
   // height_scale/bias, border, texels_per_u.
   Image cone;
   Image relaxed_cone;
+  // pyramid.exr (meso streams pyramid), level 0 as read_image returns it: W x H, R = min and
+  // G = max of the filtered surface over the texel's footprint (normalised heights); metadata
+  // height_scale/bias, border. The coarser levels are rebuilt from it exactly as the streams
+  // build them (min_max_pyramid_from_level0).
+  Image pyramid;
 };
 
 // The stream file a method needs in --streams DIR ("sdf.exr", "cone.exr",
-// "relaxed-cone.exr"), or "" for none.
+// "relaxed-cone.exr", "pyramid.exr"), or "" for none.
 std::string required_stream(const std::string& method);
 
 // The member of `maps` that holds the stream `required_stream(method)`, or nullptr when the
@@ -43,6 +48,10 @@ void check_sdf_matches(const Image& sdf, const Image& displacement, const std::s
 // relaxed-cone (kind "relaxed") output for exactly this displacement map: its size, the
 // height range it normalised, 3 channels and the kind.
 void check_cone_matches(const Image& cone, const Image& displacement, const std::string& kind, const std::string& name);
+
+// Throws InputError naming `name` unless `pyramid` is meso streams pyramid's output (level 0)
+// for exactly this displacement map: its size, 2 channels, the height range it normalised.
+void check_pyramid_matches(const Image& pyramid, const Image& displacement, const std::string& name);
 
 // Checks the stream `required_stream(method)` against the displacement map (one of the two
 // functions above); nothing for a method that needs no stream.

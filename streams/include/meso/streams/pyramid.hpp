@@ -25,6 +25,10 @@ struct MinMaxPyramid {
 // or not). Cost: O(texels), parallel over rows; deterministic.
 MinMaxPyramid build_min_max_pyramid(const HeightField& field);
 
+// The coarser levels of a pyramid from its level 0 (footprint_min_max's image, or level 0 of
+// pyramid.exr as read back), exactly as build_min_max_pyramid makes them.
+MinMaxPyramid min_max_pyramid_from_level0(Image level0);
+
 // Level 0 alone: per texel, the exact min (channel 0) and max (channel 1) of the filtered
 // surface over the texel's footprint.
 Image footprint_min_max(const HeightField& field);

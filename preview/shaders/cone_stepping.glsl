@@ -1,0 +1,98 @@
+#line 1 2
+// Cone stepping (survey 4.3.5) and relaxed cone stepping (4.4.3) on meso streams cone /
+// relaxed-cone (streams/cone_map.hpp): the algorithm of trace_cone_map
+// (streams/src/cone_map.cpp), in footprint.glsl's pixel units.
+
+// Texel (i, j) of the cone map (j from the top row) under the map's border rule.
+vec3 cone_texel(ivec2 p) {
+  ++g_fetches;
+  return texelFetch(u_cone, grid_texel_index(p), 0).rgb;
+}
+
+// Cone stepping (4.3.5) and relaxed cone stepping (4.4.3) from where the view ray enters the
+// top of the height volume. Over texel p at height z >= T_p (its apex) the cone of apex
+// (x, T_p) holds no surface above the ray's next stretch, so the ray advances to the cone's
+// boundary; when that step would not leave p's footprint, the ray is intersected exactly with
+// S over the footprint and moves on to the next texel. A relaxed cone's step may cross the
+// surface, at most once: its end below the surface starts a bisection. Returns the visible
+// point's s (object length along the view ray from the base point).
+float cone_trace(vec3 dir, bool relaxed) {
+  if (!(u_stream_scale > 0.0)) return u_stream_bias / dir.z;  // a flat map: the plane h = bias
+  ivec2 size = textureSize(u_cone, 0);
+  vec2 n = vec2(size);
+  float s_top = (u_stream_bias + u_stream_scale) / dir.z;  // where h = bias + scale (z = 1)
+  vec2 uv_top = v_uv + dir.xy * s_top;
+  // The ray o + t d, t = s - s_top, in pixel units and normalised height.
+  vec3 o = vec3(uv_top.x * n.x, (1.0 - uv_top.y) * n.y, 1.0);
+  vec3 d = vec3(dir.x * n.x, -dir.y * n.y, dir.z / u_stream_scale);
+  float horizontal = length(d.xy);
+  float t_floor = 1.0 / -d.z;  // z = 0, below every point of the surface
+  float t = 0.0;
+  float t_out = kConeFar;  // clamp: where the ray leaves [0, W] x [0, H]
+  bool clamped = u_stream_wrap == 0;
+  if (clamped) {
+    // The cones know nothing beyond the map: start where the ray comes over it (the top
+    // entry point may lie outside) and stop where it leaves it, keeping that point.
+    float t_in = 0.0;
+    for (int k = 0; k < 2; ++k) {
+      if (d[k] != 0.0) {
+        float ta = -o[k] / d[k], tb = (n[k] - o[k]) / d[k];
+        t_in = max(t_in, min(ta, tb));
+        t_out = min(t_out, max(ta, tb));
+      } else if (o[k] < 0.0 || o[k] > n[k]) {
+        t_out = -1.0;
+      }
+    }
+    if (t_in > min(t_out, t_floor)) return s_top;  // never over the map above the floor
+    t = t_in;
+  }
+  ivec2 cell = grid_cell(o.xy + t * d.xy, d.xy);
+  if (clamped) cell = clamp(cell, ivec2(0), size - 1);
+  for (int i = 0; i < max(u_iterations, 1); ++i) {
+    if (clamped && (any(lessThan(cell, ivec2(0))) || any(greaterThanEqual(cell, size)))) break;  // left the map
+    vec3 p = o + t * d;
+    vec3 c = cone_texel(cell);
+    float ratio = c.g * n.x, apex = c.b;  // ratio in texels per unit height
+    float tx = d.x > 0.0 ? (float(cell.x + 1) - o.x) / d.x : (d.x < 0.0 ? (float(cell.x) - o.x) / d.x : kConeFar);
+    float ty = d.y > 0.0 ? (float(cell.y + 1) - o.y) / d.y : (d.y < 0.0 ? (float(cell.y) - o.y) / d.y : kConeFar);
+    float t_exit = max(min(min(tx, ty), t_floor), t);
+    float den = horizontal + ratio * -d.z;  // 0 only for a flat cone seen straight on
+    float step = p.z >= apex && den > 0.0 ? ratio * (p.z - apex) / den : 0.0;
+    if (t + step < t_exit || t_exit <= t) {
+      // The cone does not reach beyond the footprint: intersect S over it exactly.
+      float t_hit;
+      if (footprint_hit(cell, o, d, t, t_exit, t_hit)) {
+        t = t_hit;
+        break;
+      }
+      if (t_exit >= t_floor) {
+        t = t_floor;
+        break;
+      }
+      t = t_exit;
+      // The next texel along the ray: across the edge (or corner) the ray left by.
+      if (tx <= t_exit) cell.x += d.x > 0.0 ? 1 : -1;
+      if (ty <= t_exit) cell.y += d.y > 0.0 ? 1 : -1;
+      continue;
+    }
+    float tq = min(t + step, min(t_floor, t_out));
+    vec3 q = o + tq * d;
+    if (relaxed && grid_surface(q.xy) >= q.z) {
+      // The step crossed the surface once (the relaxed cone's guarantee): bisect it.
+      float lo = t, hi = tq;
+      for (int it = 0; it < kConeBisectionSteps; ++it) {
+        float mid = 0.5 * (lo + hi);
+        vec3 r = o + mid * d;
+        if (grid_surface(r.xy) >= r.z) hi = mid;
+        else lo = mid;
+      }
+      t = hi;
+      break;
+    }
+    t = tq;
+    if (tq >= t_out) break;  // left the map (clamp)
+    cell = grid_cell(q.xy, d.xy);
+    if (clamped) cell = clamp(cell, ivec2(0), size - 1);
+  }
+  return s_top + t;
+}

@@ -1,0 +1,77 @@
+#line 1 5
+// Depth-interval-grid displacement mapping, DIG-DM (Judnich & Ling, "Fast Per-Pixel
+// Displacement Mapping with Screen-Space Depth Interval Grids"): two passes.
+// Pass 1 (u_dig_pass = 1) renders one ray per grid corner, the pixel at the bottom-left
+// corner of every 4 x 4 block (renderer.cpp maps grid texel (i, j) onto pixel (4i, 4j)), and
+// stores its ray depth (section 4.2: the normalised height of the ray, 0 at the slab's bottom
+// h_min, 1 at its top h_max) at the last linear-search sample above the surface, -1 where no
+// mesh is; and the fetches it took. Pass 2 (u_dig_pass = 2) bounds each pixel's search to the
+// interval of its block's four corner depths (eq. 1), widened by epsilon_1 = one pass-1 step
+// above (the stored sample may be that far above the crossing, section 4.2) and epsilon_2 =
+// one step below, then searches it linearly with the same step height (section 5.1, eq. 2:
+// a fixed step, so a short interval takes few steps) and refines by bisection (5.2). The
+// budget u_iterations is the number of linear steps over the whole slab in either pass.
+// Not a safe method: a feature between the corner rays that the corners all miss is missed.
+
+uniform int u_dig_pass;     // 1: the grid, 2: the image
+uniform sampler2D u_dig;    // pass 1's output: R = corner depth (-1: no mesh), G = fetches
+const int kDigBlock = 4;
+
+// Object length s along the view ray at which it has normalised depth z.
+float dig_s(vec3 dir, float z) { return mix(u_h_min, u_h_max, z) / dir.z; }
+
+// Pass 1: the steep-parallax linear search (4.3.1) over the whole slab; the normalised depth
+// of the last sample above the surface (1 when the first is already below).
+float dig_corner_depth(vec3 dir) {
+  int steps = max(u_iterations, 1);
+  float z_above = 1.0;
+  for (int i = 0; i <= steps; ++i) {
+    float z = 1.0 - float(i) / float(steps);
+    float s = dig_s(dir, z);
+    if (dir.z * s - height_at(v_uv + dir.xy * s) <= 0.0) break;
+    z_above = z;
+  }
+  return z_above;
+}
+
+// Pass 2: the visible point's s. `amortised` receives this pixel's share of pass 1's fetches
+// (the block's corner ray over the block's 16 pixels).
+float dig_trace(vec3 dir, out float amortised) {
+  ivec2 block = ivec2(gl_FragCoord.xy) / kDigBlock;
+  float lo = 2.0, hi = -2.0;
+  bool known = true;
+  for (int k = 0; k < 4; ++k) {
+    vec2 corner = texelFetch(u_dig, block + ivec2(k & 1, k >> 1), 0).rg;
+    if (k == 0) amortised = corner.g / float(kDigBlock * kDigBlock);
+    known = known && corner.r >= 0.0;
+    lo = min(lo, corner.r);
+    hi = max(hi, corner.r);
+  }
+  int steps = max(u_iterations, 1);
+  float step = 1.0 / float(steps);
+  // Silhouette blocks (a corner off the mesh) search the whole slab.
+  float top = known ? min(1.0, hi + step) : 1.0;
+  float bottom = known ? max(0.0, lo - step) : 0.0;
+  float z_prev = top;
+  float s_prev = dig_s(dir, top);
+  if (dir.z * s_prev - height_at(v_uv + dir.xy * s_prev) <= 0.0) return s_prev;
+  // Fixed step height through the interval; if the crossing is not in it (the grid's
+  // approximation failed), on to the slab's bottom, so a pixel is never left without a hit.
+  int n = int(ceil((top - bottom) / step - 1e-4)) + int(ceil(bottom / step - 1e-4));
+  for (int i = 1; i <= n; ++i) {
+    float z = max(top - float(i) * step, 0.0);
+    float s = dig_s(dir, z);
+    if (dir.z * s - height_at(v_uv + dir.xy * s) <= 0.0) {
+      float above = s_prev, below = s;
+      for (int j = 0; j < kReliefBinarySteps; ++j) {
+        float mid = 0.5 * (above + below);
+        if (dir.z * mid - height_at(v_uv + dir.xy * mid) <= 0.0) below = mid;
+        else above = mid;
+      }
+      return 0.5 * (above + below);
+    }
+    s_prev = s;
+    z_prev = z;
+  }
+  return dig_s(dir, 0.0);
+}

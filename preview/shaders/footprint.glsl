@@ -1,0 +1,116 @@
+#line 1 1
+// Exact first intersection of a ray with the filtered height surface over one texel's
+// footprint: the algorithm of intersect_footprint (streams/src/height_ray.cpp) that the cone
+// and pyramid tracers (trace_cone_map, trace_min_max_pyramid) share. Pixel units as the
+// streams use them: x = u W, y = (1 - v) H (rows from the top, texel (i, j) covers
+// [i, i+1] x [j, j+1]), z = normalised height in [0, 1] (object height = u_stream_bias +
+// u_stream_scale z).
+
+// k modulo n, for any sign of k (GLSL's % is undefined for negative operands).
+int grid_wrap_index(int k, int n) {
+  if (k < 0) k += n * ((n - 1 - k) / n);
+  return k % n;
+}
+
+// Texel (i, j) (j from the top row) under the stream's border rule, in GL's texel rows.
+ivec2 grid_texel_index(ivec2 p) {
+  ivec2 n = textureSize(u_height, 0);  // every stream has the height map's size (checked on load)
+  if (u_stream_wrap != 0) p = ivec2(grid_wrap_index(p.x, n.x), grid_wrap_index(p.y, n.y));
+  else p = clamp(p, ivec2(0), n - 1);
+  return ivec2(p.x, n.y - 1 - p.y);  // GL rows are bottom first
+}
+
+// The normalised height of texel (i, j). Cone maps carry it (R, the exact value the cones were
+// built from); the pyramid's tracer normalises the height map's texel.
+float grid_height(ivec2 p) {
+  ++g_fetches;
+  ivec2 q = grid_texel_index(p);
+  if (u_method == kCone || u_method == kRelaxedCone) return texelFetch(u_cone, q, 0).r;
+  return (texelFetch(u_height, q, 0).r - u_stream_bias) / u_stream_scale;
+}
+
+// The surface S at pixel position q: bilinear through the texel centres (GL_LINEAR's
+// surface, HeightField::bilinear), computed from fetched texels so that it is the exact
+// surface the cones were built for, free of the sampler's reduced weight precision.
+float grid_surface(vec2 q) {
+  vec2 f = q - 0.5;
+  vec2 f0 = floor(f);
+  vec2 w = f - f0;
+  ivec2 i = ivec2(f0);
+  float a = grid_height(i), b = grid_height(i + ivec2(1, 0));
+  float c = grid_height(i + ivec2(0, 1)), d = grid_height(i + ivec2(1, 1));
+  return (a * (1.0 - w.x) + b * w.x) * (1.0 - w.y) + (c * (1.0 - w.x) + d * w.x) * w.y;
+}
+
+// The texel a point belongs to: the one it is in, or on an edge the one ahead along d.
+ivec2 grid_cell(vec2 p, vec2 d) {
+  vec2 f = floor(p);
+  ivec2 c = ivec2(f);
+  if (p.x == f.x && d.x < 0.0) c.x -= 1;
+  if (p.y == f.y && d.y < 0.0) c.y -= 1;
+  return c;
+}
+
+// The first intersection of the ray o + t d with S over texel `cell`'s footprint for t in
+// [t0, t1] (the ray stays over the footprint there). The lines x = i + 1/2 and y = j + 1/2
+// split the stretch into up to three pieces over each of which S is one bilinear
+// polynomial (corners on the half-texel grid), so S(ray(t)) - z(t) is a quadratic in t.
+bool footprint_hit(ivec2 cell, vec3 o, vec3 d, float t0, float t1, out float t_hit) {
+  t_hit = t1;
+  float cx = kConeFar, cy = kConeFar;
+  if (d.x != 0.0) cx = (float(cell.x) + 0.5 - o.x) / d.x;
+  if (d.y != 0.0) cy = (float(cell.y) + 0.5 - o.y) / d.y;
+  float cut[4] = float[4](t0, min(cx, cy), max(cx, cy), t1);
+  for (int k = 1; k <= 2; ++k) cut[k] = clamp(cut[k], t0, t1);
+  for (int k = 0; k < 3; ++k) {
+    float ta = cut[k], tb = cut[k + 1];
+    if (k > 0 && !(tb > ta)) continue;  // empty stretch (the first one is kept: t0 may equal t1)
+    float tm = 0.5 * (ta + tb);
+    vec2 m = clamp(o.xy + tm * d.xy, vec2(cell), vec2(cell) + 1.0);
+    vec2 pc = vec2(m.x < float(cell.x) + 0.5 ? float(cell.x) : float(cell.x) + 0.5,
+                   m.y < float(cell.y) + 0.5 ? float(cell.y) : float(cell.y) + 0.5);
+    float v00 = grid_surface(pc), v10 = grid_surface(pc + vec2(0.5, 0.0));
+    float v01 = grid_surface(pc + vec2(0.0, 0.5)), v11 = grid_surface(pc + vec2(0.5, 0.5));
+    float pa = v10 - v00, pb = v01 - v00, pe = v00 - v10 - v01 + v11;
+    // Local coordinates (s, r) in [0, 1]^2 over the piece; the parameter is tau = t - ta,
+    // measured from the stretch's start to keep the coefficients small.
+    vec3 a3 = o + ta * d;
+    float s0 = 2.0 * (a3.x - pc.x), sd = 2.0 * d.x, r0 = 2.0 * (a3.y - pc.y), rd = 2.0 * d.y;
+    float A = pe * sd * rd;
+    float B = pa * sd + pb * rd + pe * (s0 * rd + r0 * sd) - d.z;
+    float C = v00 + pa * s0 + pb * r0 + pe * s0 * r0 - a3.z;
+    float L = tb - ta;
+    if (C >= 0.0) {
+      t_hit = ta;
+      return true;
+    }
+    float best = kConeFar;
+    if (abs(A) * L * L <= 1e-6 * (abs(A) * L * L + abs(B) * L + abs(C))) {
+      if (B != 0.0) best = -C / B;
+    } else {
+      float disc = B * B - 4.0 * A * C;
+      if (disc >= 0.0) {
+        float q = -0.5 * (B + (B >= 0.0 ? 1.0 : -1.0) * sqrt(disc));
+        float r1 = q / A, r2 = q != 0.0 ? C / q : kConeFar;
+        if (r1 >= 0.0 && r1 <= L) best = min(best, r1);
+        if (r2 >= 0.0 && r2 <= L) best = min(best, r2);
+      }
+    }
+    if (best >= 0.0 && best <= L) {
+      t_hit = ta + best;
+      return true;
+    }
+    if ((A * L + B) * L + C >= 0.0) {
+      // Rounding hid the root: bisect the sign change.
+      float lo = 0.0, hi = L;
+      for (int it = 0; it < kConeBisectionSteps; ++it) {
+        float mid = 0.5 * (lo + hi);
+        if ((A * mid + B) * mid + C >= 0.0) hi = mid;
+        else lo = mid;
+      }
+      t_hit = ta + hi;
+      return true;
+    }
+  }
+  return false;
+}

@@ -1,0 +1,90 @@
+#line 1 3
+// Pyramidal (quadtree) displacement mapping (survey 4.3.3) on meso streams pyramid
+// (streams/pyramid.hpp): every level holds, per texel, the exact maximum (G) of the filtered
+// surface over the texel's footprint, so the box [footprint] x [0, max] contains the surface
+// there. The traversal is the stackless form of trace_min_max_pyramid (streams/src/pyramid.cpp):
+// at the current level, a box the ray passes over is skipped to where the ray leaves it (and
+// the walk climbs one level, to take longer strides where the surface is low); where the ray
+// comes down into the box it advances to the box's top and descends; in a level-0 footprint
+// the ray is intersected exactly with the bilinear surface (footprint.glsl). Every decision is
+// conservative, so the first intersection is never skipped (the safe-method guarantee); the
+// budget counts loop passes. Footprint of texel x of a level with n_l texels: [x, x+1] W/n_l
+// pixels (any sizes, powers of two or not: coarser maxima cover every finer texel they overlap).
+
+// The pixel-unit exits of the ray o + t d from the cell [lo, lo + size]: (t_x, t_y).
+vec2 pyramid_cell_exits(vec2 lo, vec2 size, vec3 o, vec3 d) {
+  float tx = d.x > 0.0 ? (lo.x + size.x - o.x) / d.x : (d.x < 0.0 ? (lo.x - o.x) / d.x : kConeFar);
+  float ty = d.y > 0.0 ? (lo.y + size.y - o.y) / d.y : (d.y < 0.0 ? (lo.y - o.y) / d.y : kConeFar);
+  return vec2(tx, ty);
+}
+
+// Returns the visible point's s (object length along the view ray from the base point).
+float pyramid_trace(vec3 dir) {
+  if (!(u_stream_scale > 0.0)) return u_stream_bias / dir.z;  // a flat map: the plane h = bias
+  vec2 n = vec2(textureSize(u_height, 0));
+  float s_top = (u_stream_bias + u_stream_scale) / dir.z;  // where h = bias + scale (z = 1)
+  vec2 uv_top = v_uv + dir.xy * s_top;
+  // The ray o + t d, t = s - s_top, in pixel units and normalised height.
+  vec3 o = vec3(uv_top.x * n.x, (1.0 - uv_top.y) * n.y, 1.0);
+  vec3 d = vec3(dir.x * n.x, -dir.y * n.y, dir.z / u_stream_scale);
+  float t_end = 1.0 / -d.z;  // z = 0: below every point of the surface
+  float t = 0.0;
+  if (u_stream_wrap == 0) {
+    // Clamp: the pyramid knows nothing beyond the map; start where the ray comes over it and
+    // stop where it leaves it, keeping that point (as cone stepping does).
+    float t_in = 0.0, t_out = kConeFar;
+    for (int k = 0; k < 2; ++k) {
+      if (d[k] != 0.0) {
+        float ta = -o[k] / d[k], tb = (n[k] - o[k]) / d[k];
+        t_in = max(t_in, min(ta, tb));
+        t_out = min(t_out, max(ta, tb));
+      } else if (o[k] < 0.0 || o[k] > n[k]) {
+        t_out = -1.0;
+      }
+    }
+    if (t_in > min(t_out, t_end)) return s_top;  // never over the map above the floor
+    t = t_in;
+    t_end = min(t_end, t_out);
+  }
+  int top_level = u_pyramid_levels - 1;
+  int atlas_rows = textureSize(u_pyramid, 0).y;
+  int level = top_level;
+  for (int i = 0; i < max(u_iterations, 1) && t < t_end; ++i) {
+    ivec2 size = u_pyramid_size[level];
+    vec2 cs = n / vec2(size);  // the level's texel in pixels
+    ivec2 cell = grid_cell((o.xy + t * d.xy) / cs, d.xy);
+    vec2 exits = pyramid_cell_exits(vec2(cell) * cs, cs, o, d);
+    if (min(exits.x, exits.y) <= t) {
+      // Rounding put the point on the cell's far side: the next cell along the ray.
+      if (exits.x <= t) cell.x += d.x > 0.0 ? 1 : -1;
+      if (exits.y <= t) cell.y += d.y > 0.0 ? 1 : -1;
+      exits = pyramid_cell_exits(vec2(cell) * cs, cs, o, d);
+    }
+    float t_exit = max(min(min(exits.x, exits.y), t_end), t);
+    ivec2 fetch = u_stream_wrap != 0 ? ivec2(grid_wrap_index(cell.x, size.x), grid_wrap_index(cell.y, size.y))
+                                     : clamp(cell, ivec2(0), size - 1);
+    ++g_fetches;
+    // The height normalisation in the shader may round a texel one ulp over the stored maximum.
+    ivec2 at = u_pyramid_offset[level] + fetch;
+    float box_top = texelFetch(u_pyramid, ivec2(at.x, atlas_rows - 1 - at.y), 0).r + 1e-6;
+    if (o.z + t_exit * d.z > box_top) {
+      // The descending ray is above the box all the way across: skip it, climb a level.
+      t = t_exit;
+      level = min(level + 1, top_level);
+      continue;
+    }
+    t = max(t, (o.z - box_top) / -d.z);  // down to the box's top
+    if (level > 0) {
+      --level;
+      continue;
+    }
+    float t_hit;
+    if (footprint_hit(cell, o, d, t, t_exit, t_hit)) {
+      t = t_hit;
+      break;
+    }
+    t = t_exit;
+    level = min(level + 1, top_level);
+  }
+  return s_top + min(t, t_end);
+}

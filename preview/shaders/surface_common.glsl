@@ -1,0 +1,83 @@
+#version 450 core
+// The fragment stage of the previewer, in pieces compiled as one shader in this order:
+// surface_common.glsl (this: inputs, uniforms, the fetch counter), footprint.glsl (exact
+// intersection with the bilinear surface over one texel), cone_stepping.glsl, pyramid.glsl,
+// sphere_tracing.glsl, dig.glsl, surface.frag (the parallax family and main). Methods of the survey
+// (Szirmay-Kalos & Umenhoffer) by section: bump 4.1.1 (normal map only), parallax 4.1.2,
+// offset-limited 4.1.3, slope 4.1.4, iterative-parallax 4.2.1, steep 4.3.1, relief 4.4.1,
+// pom 4.4.2, cone 4.3.5, relaxed-cone 4.4.3, pyramid 4.3.3, sphere-tracing 4.3.4; dig: the
+// depth-interval-grid paper (dig.glsl).
+// Heights are in object units along the base normal, positive outward (meso bake's
+// displacement.exr), in [u_h_min, u_h_max]. The ray is expressed in (u, v, h) coordinates:
+// per unit of object-space length it advances dot(V,t)/|dp/du| in u, dot(V,b)/|dp/dv| in v
+// and dot(V,n) in h (survey eq. 5-7 with an orthonormalised frame).
+in vec3 v_position;
+in vec3 v_normal;
+in vec3 v_tangent;
+flat in float v_sign;
+in vec2 v_uv;
+in vec2 v_uv_scale;
+
+uniform sampler2D u_height;   // R: displacement, object units
+uniform sampler2D u_normal;   // RGB: tangent-space normal encoded n * 0.5 + 0.5
+uniform vec3 u_eye;
+uniform vec3 u_light;         // unit vector toward the light, object space
+uniform int u_method;
+uniform int u_iterations;
+uniform int u_shade;          // 0 lit, 1 uv of the visible point, 2 height of the visible point
+uniform float u_h_min;
+uniform float u_h_max;
+uniform sampler3D u_sdf;      // meso streams sdf: R = distance in units of u (bound when used)
+uniform float u_sdf_scale;    // object height = bias + scale * normalised height
+uniform float u_sdf_bias;
+uniform float u_sdf_relief;   // height range in units of u
+uniform float u_sdf_aspect;   // H / W of the height map
+uniform float u_sdf_epsilon;  // stop distance, units of u
+uniform float u_sdf_margin;   // one voxel diagonal, units of u
+uniform sampler2D u_cone;     // meso streams cone / relaxed-cone, level 0 (bound when used), read
+                              // with texelFetch only: R = texel height, G = cone ratio (units of u
+                              // per unit normalised height), B = apex height (normalised)
+uniform sampler2D u_pyramid;  // meso streams pyramid (bound when used): the maximum of the filtered
+                              // surface over each texel of every level, the levels side by side,
+                              // read with texelFetch only
+uniform int u_pyramid_levels;
+uniform ivec2 u_pyramid_offset[16];  // level l's texel (0, 0) in u_pyramid (rows from the top)
+uniform ivec2 u_pyramid_size[16];    // level l's size in texels
+// The stream of the method (cone, relaxed-cone or pyramid): its normalisation and border.
+uniform float u_stream_scale;  // object height = bias + scale * normalised height
+uniform float u_stream_bias;
+uniform int u_stream_wrap;     // 1: border wrap (the map tiles), 0: clamp
+
+// Method numbers: the order of preview_methods() in renderer.cpp (per-vertex methods, mesh
+// and tessellation, shade the point their geometry puts there: no search here).
+const int kMesh = 0, kTessellation = 1, kBump = 2, kParallax = 3, kOffsetLimited = 4, kSlope = 5,
+          kIterativeParallax = 6, kSteep = 7, kRelief = 8, kPom = 9, kCone = 10, kRelaxedCone = 11,
+          kPyramid = 12, kSphereTracing = 13, kDig = 14;
+const int kReliefBinarySteps = 8;
+const int kConeBisectionSteps = 24;  // relaxed cones: halvings of the step that crossed the surface
+const float kConeFar = 1e30;
+
+layout(location = 0) out vec4 out_color;
+// The measuring instrument's second output (an RG32F attachment when headless; discarded
+// when no draw buffer takes it): R = texture fetches the method made to find the visible
+// point, G = 1 on the mesh (the clear leaves 0 on the background).
+layout(location = 1) out vec2 out_fetches;
+
+// Fetch counter: every lookup of the height map, of a stream (cone texel, distance field
+// voxel) and of the normal map where a method searches with it (slope, iterative parallax)
+// adds one, a filtered lookup (4 texels blended by the sampler) as much as a texelFetch. The
+// shading's own lookups at the visible point are not counted.
+int g_fetches = 0;
+
+// Explicit level of detail: loops have no implicit derivatives (divergent control flow).
+float height_lookup(vec2 uv) { return textureLod(u_height, uv, 0.0).r; }
+vec3 normal_ts_at(vec2 uv) { return textureLod(u_normal, uv, 0.0).rgb * 2.0 - 1.0; }
+// The counted lookups of the searches.
+float height_at(vec2 uv) {
+  ++g_fetches;
+  return height_lookup(uv);
+}
+vec3 normal_search_at(vec2 uv) {
+  ++g_fetches;
+  return normal_ts_at(uv);
+}
