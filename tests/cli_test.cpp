@@ -404,3 +404,110 @@ TEST_F(Skeleton, WholePipeline) {
 
 }  // namespace
 }  // namespace meso
+
+// ---- meshreduce: progressive meshes and locks (issue 3) ----
+
+namespace meso {
+namespace {
+
+// A 12 x 12 grid in the z = 0 plane with UV = (x, y), written as two OBJ objects (face
+// groups after import): "hand", the 3 x 3 quads at columns and rows 4-6, and "body".
+std::string two_part_grid_obj() {
+  const int n = 12;
+  std::string s;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) {
+      const std::string x = std::to_string(double(i) / n), y = std::to_string(double(j) / n);
+      s += "v " + x + " " + y + " 0\nvt " + x + " " + y + "\n";
+    }
+  for (const bool hand : {false, true}) {
+    s += hand ? "o hand\n" : "o body\n";
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        if ((i >= 4 && i < 7 && j >= 4 && j < 7) != hand) continue;
+        auto c = [&](int di, int dj) {
+          const std::string k = std::to_string((j + dj) * (n + 1) + i + di + 1);
+          return " " + k + "/" + k;
+        };
+        s += "f" + c(0, 0) + c(1, 0) + c(1, 1) + "\nf" + c(0, 0) + c(1, 1) + c(0, 1) + "\n";
+      }
+  }
+  return s;
+}
+
+TEST(CliMeshreduce, ProgressiveLevelsEqualDirectReduction) {
+  test::TempDir d;
+  const std::string in = (d / "grid.obj").string();
+  test::write_text(d / "grid.obj", two_part_grid_obj());
+  const Result r = run("meshreduce " + in + " -o " + (d / "a.obj").string() + " --faces 60 --progressive " + (d / "a.pm").string() +
+                       " --no-measure --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto report = nlohmann::json::parse(r.out);
+  EXPECT_EQ(report["progressive"]["bytes"].get<size_t>(), fs::file_size(d / "a.pm"));
+  EXPECT_GT(report["progressive"]["collapses"].get<size_t>(), 100u);
+  // The last level is the output; others are what reducing directly gives; same bytes again.
+  ASSERT_EQ(run("meshreduce --from-progressive " + (d / "a.pm").string() + " --faces 60 -o " + (d / "b.obj").string()).code, 0);
+  EXPECT_EQ(test::read_text(d / "a.obj"), test::read_text(d / "b.obj"));
+  for (const std::string target : {"--faces 200", "--ratio 0.5"}) {
+    const Result level = run("meshreduce --from-progressive " + (d / "a.pm").string() + " " + target + " -o " + (d / "c.obj").string() +
+                             " --json");
+    ASSERT_EQ(level.code, 0) << level.err;
+    EXPECT_TRUE(nlohmann::json::parse(level.out).contains("error")) << "measured against the record's input";
+    ASSERT_EQ(run("meshreduce " + in + " " + target + " -o " + (d / "d.obj").string() + " --no-measure").code, 0);
+    EXPECT_EQ(test::read_text(d / "c.obj"), test::read_text(d / "d.obj")) << target;
+  }
+}
+
+TEST(CliMeshreduce, ProgressiveErrors) {
+  test::TempDir d;
+  const std::string in = (d / "grid.obj").string(), pm = (d / "a.pm").string(), out = (d / "out.obj").string();
+  test::write_text(d / "grid.obj", two_part_grid_obj());
+  ASSERT_EQ(run("meshreduce " + in + " -o " + (d / "a.obj").string() + " --faces 60 --progressive " + pm + " --no-measure").code, 0);
+  const std::string bytes = test::read_text(d / "a.pm");
+  test::write_text(d / "cut.pm", bytes.substr(0, bytes.size() - 100));
+  const Result cut = run("meshreduce --from-progressive " + (d / "cut.pm").string() + " --faces 100 -o " + out);
+  EXPECT_EQ(cut.code, 3);
+  EXPECT_NE(cut.err.find((d / "cut.pm").string() + ": truncated"), std::string::npos) << cut.err;
+  EXPECT_EQ(lines(cut.err), 1u) << cut.err;
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_EQ(run("meshreduce --from-progressive " + in + " --faces 100 -o " + out).code, 3) << "not a .pm";
+  EXPECT_EQ(run("meshreduce --from-progressive " + pm + " --error 1% -o " + out).code, 2);
+  EXPECT_EQ(run("meshreduce " + in + " --from-progressive " + pm + " --faces 100 -o " + out).code, 2);
+  EXPECT_EQ(run("meshreduce --faces 100 -o " + out).code, 2) << "no input";
+  // All or nothing: a .pm that cannot be written leaves no mesh either.
+  fs::create_directory(d / "folder.pm");
+  EXPECT_EQ(run("meshreduce " + in + " --faces 100 -o " + out + " --progressive " + (d / "folder.pm").string()).code, 2);
+  EXPECT_FALSE(fs::exists(out));
+}
+
+TEST(CliMeshreduce, LocksAndTheTargetOutOfReach) {
+  test::TempDir d;
+  const std::string in = (d / "grid.obj").string(), out = (d / "out.obj").string();
+  test::write_text(d / "grid.obj", two_part_grid_obj());
+  const Result hand = run("meshreduce " + in + " -o " + out + " --faces 10 --lock-group hand --no-measure --json");
+  ASSERT_EQ(hand.code, 0) << hand.err;
+  const auto report = nlohmann::json::parse(hand.out);
+  EXPECT_EQ(report["locked_vertices"], 16);
+  EXPECT_FALSE(report["target_reached"].get<bool>());
+  EXPECT_GE(report["output"]["faces"].get<size_t>(), 18u) << "the hand's 18 faces stay";
+  EXPECT_EQ(lines(hand.err), 2u) << hand.err;  // the warning, then "wrote"
+  EXPECT_NE(hand.err.find("warning: stopped at"), std::string::npos) << hand.err;
+  EXPECT_NE(hand.err.find("locks"), std::string::npos) << hand.err;
+
+  const Result boundary = run("meshreduce " + in + " -o " + out + " --faces 10 --lock-boundary --lock-group hand --no-measure --json");
+  ASSERT_EQ(boundary.code, 0) << boundary.err;
+  EXPECT_EQ(nlohmann::json::parse(boundary.out)["locked_vertices"], 48 + 16);
+  const Mesh reduced = read_mesh(out);
+  size_t outline = 0;
+  for (auto v : reduced.vertices()) outline += reduced.is_boundary(v);
+  EXPECT_EQ(outline, 48u);
+
+  const Result unknown = run("meshreduce " + in + " -o " + out + " --faces 10 --lock-group foot");
+  EXPECT_EQ(unknown.code, 2);
+  EXPECT_NE(unknown.err.find("'foot'"), std::string::npos) << unknown.err;
+  EXPECT_NE(unknown.err.find("'hand'"), std::string::npos) << unknown.err;
+}
+
+}  // namespace
+}  // namespace meso
+

@@ -4,10 +4,14 @@
 #include "meso/formats/atomic_file.hpp"
 #include "meso/formats/mesh_io.hpp"
 #include "meso/meshreduce/meshreduce.hpp"
+#include "meso/meshreduce/progressive.hpp"
 #include "meso/meshreduce/surface_distance.hpp"
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 
 namespace meso::cli {
 
@@ -33,20 +37,41 @@ ErrorTarget parse_error(const std::string& text) {
   return t;
 }
 
+void add_distance(nlohmann::json& report, Globals& g, const Mesh& input, const Mesh& out, double diagonal) {
+  const SurfaceDistance d = measure_surface_distance(input, out);
+  const double pct = diagonal > 0 ? 100.0 / diagonal : 0.0;
+  report["error"] = {{"hausdorff", d.hausdorff},
+                     {"hausdorff_percent", d.hausdorff * pct},
+                     {"rms", d.rms},
+                     {"rms_percent", d.rms * pct},
+                     {"input_to_output", d.forward},
+                     {"output_to_input", d.backward},
+                     {"samples", d.samples_a + d.samples_b},
+                     {"seconds", d.seconds}};
+  info(g, "Hausdorff distance " + std::to_string(d.hausdorff) + " (" + std::to_string(d.hausdorff * pct) + " % of the diagonal)");
+}
+
+std::string joined(const std::vector<std::string>& names) {
+  std::string s;
+  for (const auto& n : names) s += (s.empty() ? "" : ", ") + ("'" + n + "'");
+  return s;
+}
+
 }  // namespace
 
 void add_meshreduce(CLI::App& app, Context& ctx) {
   struct Args {
-    std::string input, output, error;
+    std::string input, output, error, progressive, from_progressive;
     size_t faces = 0;
     double ratio = 0;
     float max_normal_deviation = ReduceOptions{}.max_normal_deviation;
     float max_aspect_ratio = ReduceOptions{}.max_aspect_ratio;
-    bool no_measure = false;
+    bool no_measure = false, lock_boundary = false;
+    std::vector<std::string> lock_groups;
   };
   auto args = std::make_shared<Args>();
   CLI::App* sub = app.add_subcommand("meshreduce", "Reduce a high-poly mesh to a base mesh (quadric edge collapse with optimal placement)");
-  sub->add_option("input", args->input, "Input mesh (OBJ, FBX, glTF, PLY, OFF, DAE, ...)")->required();
+  auto* input_opt = sub->add_option("input", args->input, "Input mesh (OBJ, FBX, glTF, PLY, OFF, DAE, ...); not with --from-progressive");
   sub->add_option("-o,--output", args->output, "Output mesh (.obj, .ply, .gltf, .glb)")->required();
   auto* faces = sub->add_option("--faces", args->faces, "Target face count")->check(CLI::PositiveNumber);
   auto* ratio = sub->add_option("--ratio", args->ratio, "Target as a fraction of the input's faces")
@@ -66,20 +91,90 @@ void add_meshreduce(CLI::App& app, Context& ctx) {
                   "1 = equilateral) unless the faces replaced had one; 0: off")
       ->check(CLI::NonNegativeNumber & Finite)
       ->capture_default_str();
+  auto* lock_boundary =
+      sub->add_flag("--lock-boundary", args->lock_boundary, "Boundary vertices never move and are never removed (boundary edges never collapse)");
+  auto* lock_group = sub->add_option("--lock-group", args->lock_groups,
+                                     "Faces of this group (input mesh/node name) are not simplified: their vertices never move "
+                                     "and are never removed; repeatable")
+                         ->expected(1)
+                         ->allow_extra_args(false)  // one name per --lock-group: the input mesh stays positional
+                         ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  auto* progressive = sub->add_option("--progressive", args->progressive,
+                                      "Also write the progressive mesh (.pm): the input and every collapse, from which "
+                                      "--from-progressive rebuilds any level of detail between input and output");
+  auto* from = sub->add_option("--from-progressive", args->from_progressive,
+                               "Instead of reducing an input mesh, rebuild the level of detail with --faces N or --ratio R "
+                               "from a .pm file written by --progressive");
+  from->excludes(input_opt);
+  from->excludes(error);
+  from->excludes(progressive);
+  from->excludes(lock_boundary);
+  from->excludes(lock_group);
   sub->add_flag("--no-measure", args->no_measure, "Skip measuring the Hausdorff and RMS distance between input and output");
-  sub->callback([&ctx, args, faces, ratio, error] {
+  sub->callback([&ctx, args, faces, ratio, error, from] {
     if (faces->count() + ratio->count() + error->count() != 1)
       throw CLI::ValidationError("meshreduce", "give exactly one target: --faces N, --ratio R or --error E");
+    if (args->input.empty() && !from->count())
+      throw CLI::ValidationError("meshreduce", "give an input mesh (or --from-progressive FILE)");
     ErrorTarget error_target;
     if (error->count()) error_target = parse_error(args->error);
+    if (from->count()) {
+      ctx.run = [&ctx, args](nlohmann::json& report, Progress&) {
+        if (!is_writable_mesh_extension(args->output))
+          throw UsageError(args->output + ": unknown mesh extension (use .obj, .ply, .gltf or .glb)");
+        const auto t0 = std::chrono::steady_clock::now();
+        const ProgressiveMesh pm = read_progressive(args->from_progressive);
+        const size_t n = pm.input_faces();
+        const size_t target =
+            args->faces ? args->faces : static_cast<size_t>(std::llround(args->ratio * static_cast<double>(n)));
+        if (target < pm.final_faces)
+          warn(ctx.globals, "target " + std::to_string(target) + " faces is below the progressive mesh's last level (" +
+                                std::to_string(pm.final_faces) + " faces): wrote that level");
+        size_t replayed = 0;
+        const Mesh out = progressive_level(pm, target, &replayed);
+        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        OutputSet outputs;
+        write_mesh(out, outputs.add(args->output));
+        outputs.commit();
+        info(ctx.globals, "wrote " + args->output + " (" + std::to_string(out.n_faces()) + " faces, " + std::to_string(replayed) +
+                              " of " + std::to_string(pm.collapses.size()) + " collapses)");
+        report = {{"command", "meshreduce"},
+                  {"progressive", {{"path", args->from_progressive},
+                                   {"input_vertices", pm.positions.size()},
+                                   {"input_faces", n},
+                                   {"final_faces", pm.final_faces},
+                                   {"collapses", pm.collapses.size()}}},
+                  {"output", {{"path", args->output}, {"vertices", out.n_vertices()}, {"faces", out.n_faces()}}},
+                  {"target_faces", target},
+                  {"target_reached", out.n_faces() <= target},
+                  {"collapses", replayed},
+                  {"seconds", seconds}};
+        if (!args->no_measure) {
+          const Mesh input = progressive_base_input(pm);
+          const double diagonal = bounding_box(input).diagonal();
+          report["bounding_box_diagonal"] = diagonal;
+          add_distance(report, ctx.globals, input, out, diagonal);
+        }
+        return 0;
+      };
+      return;
+    }
     ctx.run = [&ctx, args, error_target](nlohmann::json& report, Progress& progress) {
       if (!is_writable_mesh_extension(args->output)) throw UsageError(args->output + ": unknown mesh extension (use .obj, .ply, .gltf or .glb)");
+      if (!args->progressive.empty() && std::filesystem::path(args->progressive) == std::filesystem::path(args->output))
+        throw UsageError(args->progressive + ": --progressive and -o name the same file");
       nlohmann::json in_report;
       const Mesh input = load_mesh(ctx.globals, args->input, in_report);
+      const auto& names = group_names(input);
+      for (const auto& g : args->lock_groups)
+        if (std::find(names.begin(), names.end(), g) == names.end())
+          throw UsageError("--lock-group '" + g + "': " + args->input + " has no face group of that name (groups: " + joined(names) + ")");
       const double diagonal = bounding_box(input).diagonal();
       ReduceOptions o;
       o.max_normal_deviation = args->max_normal_deviation;
       o.max_aspect_ratio = args->max_aspect_ratio;
+      o.lock_boundary = args->lock_boundary;
+      o.lock_groups = args->lock_groups;
       const bool by_error = !args->error.empty();
       if (by_error) {
         o.max_error = error_target.percent ? error_target.value * 0.01 * diagonal : error_target.value;
@@ -91,11 +186,18 @@ void add_meshreduce(CLI::App& app, Context& ctx) {
                                 std::to_string(input.n_faces()) + ": the mesh is written unchanged");
       }
       ReduceReport r;
-      const Mesh out = reduce_mesh(input, o, &r, progress);
+      ProgressiveMesh pm;
+      const bool record = !args->progressive.empty();
+      const Mesh out = reduce_mesh(input, o, &r, progress, record ? &pm : nullptr);
+      const bool locked = o.lock_boundary || !o.lock_groups.empty();
       if (!r.target_reached)
-        warn(ctx.globals, "stopped at " + std::to_string(r.output_faces) + " faces: no further collapse keeps the UV charts, boundaries and orientation intact");
+        warn(ctx.globals, "stopped at " + std::to_string(r.output_faces) + " faces, not " + std::to_string(o.target_faces) +
+                              (locked ? ": the locks (" + std::to_string(r.locked_vertices) +
+                                            " vertices) and the constraints allow no further collapse"
+                                      : ": no further collapse keeps the UV charts, boundaries and orientation intact"));
       OutputSet outputs;
       write_mesh(out, outputs.add(args->output));
+      if (record) write_progressive(pm, outputs.add(args->progressive));
       outputs.commit();
       info(ctx.globals, "wrote " + args->output + " (" + std::to_string(r.output_faces) + " faces)");
       report = {{"command", "meshreduce"},
@@ -107,24 +209,16 @@ void add_meshreduce(CLI::App& app, Context& ctx) {
                 {"seconds", r.seconds},
                 {"bounding_box_diagonal", diagonal},
                 {"rejected", r.rejected}};
+      if (locked) report["locked_vertices"] = r.locked_vertices;
+      if (record)
+        report["progressive"] = {{"path", args->progressive},
+                                 {"collapses", pm.collapses.size()},
+                                 {"bytes", std::filesystem::file_size(args->progressive)}};
       if (by_error) {
         report["target_error"] = o.max_error;
         report["tracked_error"] = r.tracked_error;
       }
-      if (!args->no_measure) {
-        const SurfaceDistance d = measure_surface_distance(input, out);
-        const double pct = diagonal > 0 ? 100.0 / diagonal : 0.0;
-        report["error"] = {{"hausdorff", d.hausdorff},
-                           {"hausdorff_percent", d.hausdorff * pct},
-                           {"rms", d.rms},
-                           {"rms_percent", d.rms * pct},
-                           {"input_to_output", d.forward},
-                           {"output_to_input", d.backward},
-                           {"samples", d.samples_a + d.samples_b},
-                           {"seconds", d.seconds}};
-        info(ctx.globals, "Hausdorff distance " + std::to_string(d.hausdorff) + " (" +
-                              std::to_string(diagonal > 0 ? 100.0 * d.hausdorff / diagonal : 0.0) + " % of the diagonal)");
-      }
+      if (!args->no_measure) add_distance(report, ctx.globals, input, out, diagonal);
       return 0;
     };
   });

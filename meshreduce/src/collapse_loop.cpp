@@ -42,6 +42,7 @@ CollapseLoop::CollapseLoop(Mesh& mesh, const LoopOptions& options) : mesh_(mesh)
   pos_.resize(nv);
   for (auto v : mesh_.vertices()) pos_[ix(v.idx())] = (to_d(mesh_.point(v)) - center_) * scale_;
   moved_.assign(nv, 0);
+  pinned_.assign(nv, 0);
 
   efeat_.assign(ne, 0);
   for (auto e : mesh_.edges()) efeat_[ix(e.idx())] = mesh_.is_boundary(e) || seam(e);
@@ -103,13 +104,17 @@ bool CollapseLoop::evaluate(Mesh::EdgeHandle e, Candidate& c) {
   if (mesh_.status(e).deleted()) return false;
   const HalfedgeHandle h0 = mesh_.halfedge_handle(e, 0), h1 = mesh_.halfedge_handle(e, 1);
   const uint16_t da = vdeg_[ix(mesh_.from_vertex_handle(h0).idx())], db = vdeg_[ix(mesh_.to_vertex_handle(h0).idx())];
+  // A pinned vertex (a lock) behaves like a corner of the seam network: it is never the
+  // removed end, and the other end collapses onto it. With both ends pinned, the edge keeps
+  // its usual placement and the lock module refuses it.
+  const bool pa = pinned_[ix(mesh_.from_vertex_handle(h0).idx())] != 0, pb = pinned_[ix(mesh_.to_vertex_handle(h0).idx())] != 0;
   HalfedgeHandle h;
-  bool fixed = false;  // slide onto v1 (a corner of the feature network)
+  bool fixed = false;  // slide onto v1 (a corner of the feature network, or pinned)
   if (efeat_[ix(e.idx())]) {
     c.placement = Placement::slide;
-    if (da == 2) {
+    if (da == 2 && (!pa || pb)) {
       h = h0;
-      fixed = db != 2;
+      fixed = db != 2 || pb;
     } else if (db == 2) {
       h = h1;
       fixed = true;
@@ -117,8 +122,8 @@ bool CollapseLoop::evaluate(Mesh::EdgeHandle e, Candidate& c) {
       return false;  // both ends are corners of the seam/boundary network
     }
   } else if (da == 0 && db == 0) {
-    c.placement = Placement::optimal;
-    h = h0;
+    c.placement = pa == pb ? Placement::optimal : Placement::onto;
+    h = pa && !pb ? h1 : h0;
   } else if (da == 0) {
     c.placement = Placement::onto;
     h = h0;
@@ -336,6 +341,7 @@ void CollapseLoop::apply(const Candidate& c) {
   }
   pos_[i1] = c.q;
   faces_ -= static_cast<size_t>(c.fl.is_valid()) + static_cast<size_t>(c.fr.is_valid());
+  const int collapsed = c.h.idx();
   mesh_.collapse(c.h);
   const VertexHandle w = c.v1;
   if (options_.has_uvs) {
@@ -351,6 +357,16 @@ void CollapseLoop::apply(const Candidate& c) {
         }
       }
     }
+  }
+  if (record_) {
+    // After the UVs: the replay sets the same corners, in the same (circulator) order.
+    ProgressiveMesh::Collapse r;
+    r.halfedge = static_cast<uint32_t>(collapsed);
+    r.position = object_point(w);
+    record_->collapses.push_back(r);
+    if (options_.has_uvs)
+      for (auto h : mesh_.vih_range(w))
+        if (mesh_.face_handle(h).is_valid()) record_->uvs.push_back(mesh_.texcoord2D(h));
   }
   update_features_around(w);
   for (const int e : around_) {
@@ -452,12 +468,17 @@ size_t CollapseLoop::run(Progress& progress) {
   return collapses;
 }
 
+Vec3f CollapseLoop::object_point(VertexHandle v) const {
+  const size_t i = ix(v.idx());
+  if (!moved_[i]) return mesh_.point(v);
+  const Vec3d p = pos_[i] / scale_ + center_;
+  return Vec3f(static_cast<float>(p[0]), static_cast<float>(p[1]), static_cast<float>(p[2]));
+}
+
 void CollapseLoop::write_back() {
   for (auto v : mesh_.vertices()) {
-    const size_t i = ix(v.idx());
-    if (!moved_[i] || mesh_.status(v).deleted()) continue;
-    const Vec3d p = pos_[i] / scale_ + center_;
-    mesh_.set_point(v, Vec3f(static_cast<float>(p[0]), static_cast<float>(p[1]), static_cast<float>(p[2])));
+    if (!moved_[ix(v.idx())] || mesh_.status(v).deleted()) continue;
+    mesh_.set_point(v, object_point(v));
   }
 }
 

@@ -19,6 +19,7 @@
 
 #include "meso/core/mesh.hpp"
 #include "meso/core/progress.hpp"
+#include "meso/meshreduce/progressive.hpp"
 
 #include "quadric.hpp"
 
@@ -67,6 +68,15 @@ struct Candidate {
   const std::vector<FanFace>* fan = nullptr;  // faces around v0 and v1 but fl and fr
 };
 
+// Boundary halfedges carry no corner, and their UVs are whatever the input held (OpenMesh
+// leaves them uninitialised), but OpenMesh's OBJ writer lists every halfedge's UV: one fixed
+// value makes equal meshes write equal files (reduce_mesh and progressive_level both call it).
+inline void clear_boundary_uvs(Mesh& mesh) {
+  if (!mesh.has_halfedge_texcoords2D()) return;
+  for (auto h : mesh.halfedges())
+    if (mesh.is_boundary(h)) mesh.set_texcoord2D(h, Vec2f(0, 0));
+}
+
 class CollapseLoop;
 
 // A constraint on collapses (the counterpart of an OpenMesh Decimater binary module): asked
@@ -104,6 +114,18 @@ class CollapseLoop {
   // input coordinates bit for bit.
   void write_back();
 
+  // Appends every collapse made to `pm` (progressive.hpp): the halfedge, then the kept
+  // vertex's position as write_back() would leave it and the UVs of its corners, so that a
+  // replay stopped after any collapse equals this loop stopped there.
+  void record(ProgressiveMesh* pm) { record_ = pm; }
+
+  // Locks: a pinned vertex is never removed and never moves. Placement collapses a free
+  // vertex onto a pinned one (as onto a seam corner); an edge whose ends are both pinned is
+  // still evaluated so that the lock module that pinned them refuses it (and counts it).
+  // Called by modules in initialize(), before the heap is built.
+  void pin(VertexHandle v) { pinned_[static_cast<size_t>(v.idx())] = 1; }
+  bool pinned(VertexHandle v) const { return pinned_[static_cast<size_t>(v.idx())] != 0; }
+
   // Read access for modules.
   const Mesh& mesh() const { return mesh_; }
   const Vec3d& pos(VertexHandle v) const { return pos_[static_cast<size_t>(v.idx())]; }
@@ -128,6 +150,7 @@ class CollapseLoop {
   void update_features_around(VertexHandle w);
   uint16_t feature_degree(VertexHandle v) const;
   bool seam(Mesh::EdgeHandle e) const;
+  Vec3f object_point(VertexHandle v) const;  // what write_back() gives v now
 
   // Indexed binary heap on (key, edge).
   bool less(const Slot& a, const Slot& b) const { return a.key < b.key || (a.key == b.key && a.edge < b.edge); }
@@ -147,7 +170,7 @@ class CollapseLoop {
   double scale_ = 1;
   std::vector<Vec3d> pos_;
   std::vector<Quadric> quadric_;
-  std::vector<uint8_t> efeat_, moved_;
+  std::vector<uint8_t> efeat_, moved_, pinned_;
   std::vector<uint16_t> vdeg_;  // feature edges per vertex
   std::vector<Slot> heap_;
   std::vector<int> hpos_;
@@ -156,6 +179,7 @@ class CollapseLoop {
   std::vector<std::unique_ptr<CollapseModule>> modules_;
   size_t faces_ = 0;
   double max_cost_ = 0;
+  ProgressiveMesh* record_ = nullptr;
 };
 
 }  // namespace meso::reduce

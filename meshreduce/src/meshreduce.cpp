@@ -1,8 +1,10 @@
 #include "meso/meshreduce/meshreduce.hpp"
+#include "meso/meshreduce/progressive.hpp"
 
 #include "collapse_loop.hpp"
 #include "modules.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <stdexcept>
 
@@ -17,12 +19,72 @@ namespace {
 // are held to this fraction of the target.
 constexpr double kErrorMargin = 0.7;
 
+// The input as a progressive record stores it: live vertices in order, faces in order with
+// their corner order (corner 0 = to-vertex of the face's halfedge), corner UVs, groups.
+void capture_input(const Mesh& mesh, ProgressiveMesh& pm) {
+  pm = ProgressiveMesh();
+  std::vector<uint32_t> index(mesh.n_vertices(), 0);
+  for (auto v : mesh.vertices()) {
+    index[static_cast<size_t>(v.idx())] = static_cast<uint32_t>(pm.positions.size());
+    pm.positions.push_back(mesh.point(v));
+  }
+  pm.has_uvs = has_uvs(mesh);
+  pm.group_names = group_names(mesh);
+  for (auto f : mesh.faces()) {
+    for (auto h : face_halfedges(mesh, f)) {
+      pm.corners.push_back(index[static_cast<size_t>(mesh.to_vertex_handle(h).idx())]);
+      if (pm.has_uvs) pm.corner_uvs.push_back(mesh.texcoord2D(h));
+    }
+    pm.face_groups.push_back(static_cast<uint32_t>(std::max(0, face_group(mesh, f))));
+  }
+  pm.final_faces = pm.input_faces();
+}
+
+// Per vertex: whether a lock holds it.
+std::vector<uint8_t> boundary_vertices(const Mesh& mesh) {
+  std::vector<uint8_t> locked(mesh.n_vertices(), 0);
+  for (auto v : mesh.vertices()) locked[static_cast<size_t>(v.idx())] = mesh.is_boundary(v);
+  return locked;
+}
+
+std::vector<uint8_t> group_vertices(const Mesh& mesh, const std::vector<std::string>& groups) {
+  const auto& names = group_names(mesh);
+  std::vector<uint8_t> match(names.size(), 0);
+  for (size_t g = 0; g < names.size(); ++g) match[g] = std::find(groups.begin(), groups.end(), names[g]) != groups.end();
+  std::vector<uint8_t> locked(mesh.n_vertices(), 0);
+  for (auto f : mesh.faces()) {
+    const int g = face_group(mesh, f);
+    if (g < 0 || static_cast<size_t>(g) >= match.size() || !match[static_cast<size_t>(g)]) continue;
+    for (auto v : mesh.fv_range(f)) locked[static_cast<size_t>(v.idx())] = 1;
+  }
+  return locked;
+}
+
 }  // namespace
 
-Mesh reduce_mesh(const Mesh& input, const ReduceOptions& options, ReduceReport* report, Progress& progress) {
+Mesh reduce_mesh(const Mesh& input, const ReduceOptions& options, ReduceReport* report, Progress& progress,
+                 ProgressiveMesh* progressive) {
   using namespace reduce;
   const auto t0 = std::chrono::steady_clock::now();
-  Mesh mesh = input;
+  Mesh mesh;
+  if (progressive) {
+    // The collapses refer to halfedges: reduce the mesh the replay will rebuild. Compaction
+    // reorders (OpenMesh swaps the last live element into each hole): capture after it.
+    bool garbage = false;
+    for (auto v : input.all_vertices()) garbage |= input.status(v).deleted();
+    for (auto e : input.all_edges()) garbage |= input.status(e).deleted();
+    for (auto f : input.all_faces()) garbage |= input.status(f).deleted();
+    if (garbage) {
+      Mesh live = input;
+      live.garbage_collection();
+      capture_input(live, *progressive);
+    } else {
+      capture_input(input, *progressive);
+    }
+    mesh = progressive_base_input(*progressive);
+  } else {
+    mesh = input;
+  }
   mesh.garbage_collection();  // counts and face indices refer to live elements only
   ReduceReport rep;
   rep.input_vertices = mesh.n_vertices();
@@ -37,6 +99,16 @@ Mesh reduce_mesh(const Mesh& input, const ReduceOptions& options, ReduceReport* 
     lo.has_uvs = has_uvs(mesh);
     lo.boundary_weight = options.boundary_weight;
     CollapseLoop loop(mesh, lo);
+    if (progressive) loop.record(progressive);
+    // Locks first: the cheapest test, and the one that explains a target out of reach.
+    std::vector<uint8_t> pinned(mesh.n_vertices(), 0);
+    auto lock = [&](const char* name, std::vector<uint8_t> locked) {
+      for (size_t i = 0; i < locked.size(); ++i) pinned[i] |= locked[i];
+      loop.add(std::make_unique<VertexLock>(name, std::move(locked)));
+    };
+    if (options.lock_boundary) lock("lock_boundary", boundary_vertices(mesh));
+    if (!options.lock_groups.empty()) lock("lock_group", group_vertices(mesh, options.lock_groups));
+    rep.locked_vertices = static_cast<size_t>(std::count(pinned.begin(), pinned.end(), uint8_t{1}));
     const double diagonal = static_cast<double>(bounding_box(mesh).diagonal()) * loop.scale();
     loop.add(std::make_unique<ChartGuard>(loop, options.boundary_tolerance * diagonal, options.uv_tolerance));
     if (lo.has_uvs) loop.add(std::make_unique<UvFoldGuard>());
@@ -56,6 +128,8 @@ Mesh reduce_mesh(const Mesh& input, const ReduceOptions& options, ReduceReport* 
     loop.write_back();
     mesh.garbage_collection();
   }
+  if (progressive) progressive->final_faces = mesh.n_faces();
+  clear_boundary_uvs(mesh);
   compute_angle_weighted_normals(mesh);
 
   rep.output_vertices = mesh.n_vertices();

@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <map>
@@ -426,6 +428,129 @@ TEST(MeshReduce, NormalDeviationIsBounded) {
       EXPECT_GE(OpenMesh::dot(n, radial), std::cos(25.0 * M_PI / 180.0) - 1e-3) << "face " << f.idx();
     }
   }
+}
+
+// ---- locks ----
+
+// A face's corners (positions and UVs, from its first corner on) as bytes: sorted lists of
+// these compare faces bit for bit whatever the order compaction left them in.
+std::string face_bytes(const Mesh& m, FaceHandle f) {
+  std::string s;
+  for (auto h : face_halfedges(m, f)) {
+    s.append(reinterpret_cast<const char*>(&m.point(m.to_vertex_handle(h))), sizeof(Vec3f));
+    if (has_uvs(m)) s.append(reinterpret_cast<const char*>(&m.texcoord2D(h)), sizeof(Vec2f));
+  }
+  return s;
+}
+
+// A 24 x 24 grid whose 6 x 4 quads at columns 8-13, rows 10-13 form the group "hand": with
+// the group locked, its 48 faces come out exactly as they went in (corner order, positions,
+// UVs), while the rest is reduced around them.
+TEST(MeshReduce, LockedGroupComesOutUnchanged) {
+  Mesh in = test::make_grid(24, 24);
+  std::vector<int> groups;
+  std::vector<std::string> hand;
+  for (auto f : in.faces()) {
+    Vec3f c(0, 0, 0);
+    for (auto v : in.fv_range(f)) c += in.point(v) / 3.0f;
+    const int col = int(c[0] * 24), row = int(c[1] * 24);
+    const bool locked = col >= 8 && col < 14 && row >= 10 && row < 14;
+    groups.push_back(locked ? 1 : 0);
+    if (locked) hand.push_back(face_bytes(in, f));
+  }
+  ASSERT_EQ(hand.size(), 48u);
+  std::sort(hand.begin(), hand.end());
+  set_face_groups(in, {"body", "hand"}, groups);
+  ReduceOptions o;
+  o.target_faces = 100;
+  o.lock_groups = {"hand"};
+  ReduceReport r;
+  const Mesh out = reduce_mesh(in, o, &r);
+  EXPECT_EQ(r.locked_vertices, 7u * 5u);
+  EXPECT_LT(out.n_faces(), 200u) << "the free part is still reduced";
+  std::vector<std::string> kept;
+  for (auto f : out.faces())
+    if (face_group(out, f) == 1) kept.push_back(face_bytes(out, f));
+  std::sort(kept.begin(), kept.end());
+  EXPECT_TRUE(kept == hand) << "the locked faces changed";
+  // Without the lock the region is simplified; a name that matches no group locks nothing.
+  o.lock_groups = {"foot"};
+  const Mesh free = reduce_mesh(in, o, &r);
+  EXPECT_EQ(r.locked_vertices, 0u);
+  o.lock_groups.clear();
+  EXPECT_TRUE(same_bytes(free, reduce_mesh(in, o)));
+  size_t hand_faces = 0;
+  for (auto f : free.faces()) hand_faces += face_group(free, f) == 1;
+  EXPECT_LT(hand_faces, 48u);
+}
+
+// --lock-boundary: the 96 boundary vertices of a 24 x 24 grid never move or go, so no
+// boundary edge collapses; a triangulated polygon with 96 corners keeps at least 94 faces,
+// so a target of 20 cannot be met: reduction stops short and says so.
+TEST(MeshReduce, LockedBoundaryStaysAndTargetIsOutOfReach) {
+  const Mesh in = test::make_grid(24, 24);
+  auto outline_of = [](const Mesh& m) {
+    std::vector<std::array<float, 3>> points;
+    for (auto v : m.vertices())
+      if (m.is_boundary(v)) points.push_back({m.point(v)[0], m.point(v)[1], m.point(v)[2]});
+    std::sort(points.begin(), points.end());
+    return points;
+  };
+  const auto outline = outline_of(in);
+  ASSERT_EQ(outline.size(), 96u);
+  ReduceOptions o;
+  o.target_faces = 20;
+  o.lock_boundary = true;
+  ReduceReport r;
+  const Mesh out = reduce_mesh(in, o, &r);
+  EXPECT_FALSE(r.target_reached);
+  EXPECT_GE(out.n_faces(), 94u);
+  EXPECT_LT(out.n_faces(), 400u);
+  EXPECT_EQ(r.locked_vertices, 96u);
+  EXPECT_GT(r.rejected.at("lock_boundary"), 0u);
+  size_t boundary_edges = 0;
+  for (auto e : out.edges()) boundary_edges += out.is_boundary(e);
+  EXPECT_TRUE(outline_of(out) == outline) << "boundary vertices kept, bit for bit";
+  EXPECT_EQ(boundary_edges, 96u);
+  for (auto f : out.faces()) EXPECT_GT(uv_double_area(out, f), 0.0f);
+  // Without the lock the straight sides are simplified.
+  o.lock_boundary = false;
+  size_t free_outline = 0;
+  const Mesh free = reduce_mesh(in, o, &r);
+  for (auto v : free.vertices()) free_outline += free.is_boundary(v);
+  EXPECT_LT(free_outline, 96u);
+}
+
+// Both locks at once on a cylinder (two boundary loops, a UV seam): boundary and group
+// vertices all survive in place.
+TEST(MeshReduce, LocksCombine) {
+  Mesh in = test::make_parametric(
+      32, 16, [](double s, double t) { return Vec3f(float(std::cos(2 * M_PI * s)), float(std::sin(2 * M_PI * s)), float(2 * t)); },
+      true, false);
+  std::vector<int> groups;
+  std::vector<Vec3f> locked;
+  for (auto f : in.faces()) {
+    const bool g = f.idx() >= 400 && f.idx() < 440;
+    groups.push_back(g);
+    for (auto v : in.fv_range(f))
+      if (g || in.is_boundary(v)) locked.push_back(in.point(v));
+  }
+  set_face_groups(in, {"tube", "band"}, groups);
+  ReduceOptions o;
+  o.target_faces = 50;
+  o.lock_boundary = true;
+  o.lock_groups = {"band"};
+  ReduceReport r;
+  const Mesh out = reduce_mesh(in, o, &r);
+  EXPECT_LT(out.n_faces(), in.n_faces() / 2);
+  for (const Vec3f& p : locked) {
+    bool found = false;
+    for (auto v : out.vertices()) found |= out.point(v) == p;
+    EXPECT_TRUE(found) << p;
+  }
+  size_t band = 0;
+  for (auto f : out.faces()) band += face_group(out, f) == 1;
+  EXPECT_EQ(band, 40u);
 }
 
 // ---- determinism ----

@@ -11,12 +11,37 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <utility>
 #include <vector>
 
 namespace meso::reduce {
 
 inline Vec3d new_normal(const FanFace& f, const Vec3d& q) { return OpenMesh::cross(f.b - q, f.c - q); }
 inline Vec3d old_normal(const FanFace& f) { return OpenMesh::cross(f.b - f.old_p, f.c - f.old_p); }
+
+// Locks (--lock-boundary, --lock-group): the flagged vertices are never removed and never
+// move, so a face whose corners are all locked comes out exactly as it went in (it can only
+// be removed as fl/fr of a collapse, whose two ends are its corners). The module pins its
+// vertices in the loop, whose placement then collapses free neighbours onto them (the
+// region around a lock still simplifies up to its outline); what it refuses, and counts,
+// is the rest: an edge between two locked vertices, or a locked end that would have to go.
+class VertexLock final : public CollapseModule {
+ public:
+  VertexLock(const char* name, std::vector<uint8_t> locked) : name_(name), locked_(std::move(locked)) {}
+  const char* name() const override { return name_; }
+
+  void initialize(CollapseLoop& loop) override {
+    for (auto v : loop.mesh().vertices())
+      if (locked(v)) loop.pin(v);
+  }
+
+  bool allow(const Candidate& c) override { return !locked(c.v0) && (!locked(c.v1) || c.q == c.p1); }
+
+ private:
+  bool locked(VertexHandle v) const { return locked_[static_cast<size_t>(v.idx())] != 0; }
+  const char* name_;
+  std::vector<uint8_t> locked_;
+};
 
 // Keeps UV charts and the outline: a seam/boundary vertex slides only along a straight
 // stretch. The outline before (... other0, v0, v1, other1 ...) must stay within the

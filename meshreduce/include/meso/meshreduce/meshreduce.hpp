@@ -4,8 +4,9 @@
 // meso's own collapse loop on OpenMesh's collapse primitives (is_collapse_ok, collapse):
 // per-vertex area-weighted plane quadrics, cached, summed on collapse; optimal placement of
 // the kept vertex; one lean indexed heap of edges; constraints as small composable modules
-// (chart guard, UV folds, normal flips, normal deviation, needles, error bound) that are
-// asked only about the collapse about to be made. See meshreduce/src/collapse_loop.hpp.
+// (locks, chart guard, UV folds, normal flips, normal deviation, needles, error bound) that
+// are asked only about the collapse about to be made. See meshreduce/src/collapse_loop.hpp.
+// Progressive meshes (the collapse sequence, any level of detail): progressive.hpp.
 #pragma once
 
 #include "meso/core/mesh.hpp"
@@ -14,8 +15,11 @@
 #include <cstddef>
 #include <map>
 #include <string>
+#include <vector>
 
 namespace meso {
+
+struct ProgressiveMesh;  // progressive.hpp
 
 struct ReduceOptions {
   // Targets. Reduction stops at the first one met; at least one must be set.
@@ -45,6 +49,16 @@ struct ReduceOptions {
   // times sqrt(3) over four times its area: 1 for an equilateral triangle) exceeds this,
   // unless the faces it replaces were already worse. 0 turns it off.
   float max_aspect_ratio = 40.0f;
+
+  // Locks: these vertices are never removed and never move (collapses of free neighbours
+  // onto them are allowed), so faces whose corners are all locked come out unchanged. With
+  // lock_boundary, every vertex on a mesh boundary (boundary edges then never collapse);
+  // with lock_groups, every corner of a face whose group name (group_names(), the input's
+  // mesh/node names) is in the list. Names that match no group lock nothing. When locks
+  // leave too few legal collapses, reduction stops at the closest count (target_reached
+  // false).
+  bool lock_boundary = false;
+  std::vector<std::string> lock_groups;
 };
 
 struct ReduceReport {
@@ -62,6 +76,7 @@ struct ReduceReport {
   // With max_error: the largest distance from an input sample to the output face it is
   // tracked on, in object units (-1 when not tracked).
   double tracked_error = -1;
+  size_t locked_vertices = 0;  // vertices pinned by lock_boundary and lock_groups
 };
 
 // Returns the reduced mesh. Guarantees:
@@ -77,9 +92,19 @@ struct ReduceReport {
 //    and stay on the old seam/boundary polyline; corners of the seam network stay put;
 //  - output faces are compacted (no deleted elements), groups kept per face, vertex normals
 //    recomputed (angle-weighted);
+//  - locked vertices (lock_boundary, lock_groups) keep their positions bit for bit and
+//    survive; faces whose corners are all locked keep their corners and UVs;
 //  - deterministic: the same input and options give the same output, bit for bit.
 // The input is not modified.
+//
+// With `progressive`, also records the input and every collapse made (progressive.hpp):
+// progressive_level(*progressive, k) then equals reduce_mesh with target_faces = k, for
+// every k from the output's face count to the input's. The reduction then runs on the input
+// rebuilt face by face (progressive_base_input). That is the input itself, and the output
+// the same as without `progressive`, for meshes built by add_face in face order (the test
+// meshes; read_mesh unless a face failed to add, which can leave OpenMesh's boundary links
+// around a non-manifold vertex in another order).
 Mesh reduce_mesh(const Mesh& input, const ReduceOptions& options, ReduceReport* report = nullptr,
-                 Progress& progress = null_progress());
+                 Progress& progress = null_progress(), ProgressiveMesh* progressive = nullptr);
 
 }  // namespace meso
