@@ -1,0 +1,53 @@
+// bake_time: times meso's bake() call alone on two mesh files (the meshes read as `meso bake`
+// reads them), for bench/bake_peers.sh's comparison with Blender's bake call.
+//
+//   bake_time LOW HIGH SIZE FRONT BACK [REPEATS]
+//
+// Prints one JSON object: the best and the median of REPEATS (default 3) runs of bake() at
+// SIZE x SIZE with 1 sample and the default maps (displacement, tangent- and object-space
+// normals, coverage and the dilation are all part of bake()), texels, rays/s (2 rays per
+// covered texel). Threads: TBB's default (limit it with taskset, as the script does, or
+// run on a machine of that size).
+#include "meso/bake/bake.hpp"
+#include "meso/core/error.hpp"
+#include "meso/formats/mesh_io.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <vector>
+
+int main(int argc, char** argv) {
+  if (argc < 6) {
+    std::fprintf(stderr, "usage: bake_time LOW HIGH SIZE FRONT BACK [REPEATS]\n");
+    return 2;
+  }
+  try {
+    const meso::Mesh low = meso::read_mesh(argv[1]);
+    const meso::Mesh high = meso::read_mesh(argv[2]);
+    meso::BakeOptions o;
+    o.width = o.height = std::atoi(argv[3]);
+    o.front = static_cast<float>(std::atof(argv[4]));
+    o.back = static_cast<float>(std::atof(argv[5]));
+    const int repeats = argc > 6 ? std::max(1, std::atoi(argv[6])) : 3;
+    std::vector<double> seconds;
+    size_t covered = 0, hits = 0;
+    for (int i = 0; i < repeats; ++i) {
+      const auto t0 = std::chrono::steady_clock::now();
+      const meso::BakeResult r = meso::bake(low, high, o);
+      seconds.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+      covered = r.covered_texels;
+      hits = r.hits;
+    }
+    std::sort(seconds.begin(), seconds.end());
+    std::printf("{\"size\": %d, \"low_faces\": %zu, \"high_faces\": %zu, \"covered_texels\": %zu, \"hits\": %zu, \"repeats\": %d, "
+                "\"best_seconds\": %.4f, \"median_seconds\": %.4f, \"rays_per_second\": %.4g}\n",
+                o.width, low.n_faces(), high.n_faces(), covered, hits, repeats, seconds.front(), seconds[seconds.size() / 2],
+                2.0 * static_cast<double>(covered) / seconds[seconds.size() / 2]);
+  } catch (const meso::Error& e) {
+    std::fprintf(stderr, "bake_time: %s\n", e.what());
+    return static_cast<int>(e.code());
+  }
+  return 0;
+}
