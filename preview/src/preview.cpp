@@ -54,10 +54,17 @@ class EglContext {
     if (!eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, context_))
       throw InternalError("EGL: cannot make the context current");
   }
+  // Several previews may live at once (each with its own context): every use makes its own
+  // context current first, or it would draw into whichever was made current last.
+  void make_current() const {
+    if (eglGetCurrentContext() != context_ && !eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, context_))
+      throw InternalError("EGL: cannot make the context current");
+  }
   ~EglContext() {
     eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
     eglDestroyContext(display_, context_);
-    eglTerminate(display_);
+    // No eglTerminate: every preview shares the one surfaceless display (EGL does not count
+    // initialisations), and terminating it would invalidate the contexts of the others.
   }
   EglContext(const EglContext&) = delete;
   EglContext& operator=(const EglContext&) = delete;
@@ -134,12 +141,14 @@ struct HeadlessPreview::Impl {
     renderer = std::make_unique<SurfaceRenderer>(base, maps);
   }
   ~Impl() {
+    context.make_current();
     target.reset();
     renderer.reset();
   }
   // Binds a target of the options' size, drawn into.
   void draw(const PreviewOptions& o) {
     check_maps(maps, o.method);
+    context.make_current();
     if (!target || target->width() != o.width || target->height() != o.height) {
       target.reset();
       target = std::make_unique<OffscreenTarget>(o.width, o.height);

@@ -782,6 +782,22 @@ TEST(Measure, TessellationIsCrackFree) {
   }
 }
 
+// Two previews at once (compare_methods makes its own while the caller holds one): each
+// draws into its own context, before and after the other is gone.
+TEST(Measure, PreviewsCoexist) {
+  const Mesh quad = test::make_grid(1, 1);
+  const PreviewMaps maps = maps_with_height([](float) { return 0.05f; });
+  HeadlessPreview first(quad, maps);
+  const PreviewOptions o = centre_uv_options("pom", 30.0f);
+  const Image before = first.render(o);
+  {
+    HeadlessPreview second(quad, maps);
+    EXPECT_EQ(second.render(o).pixels, before.pixels);
+    EXPECT_EQ(first.render(o).pixels, before.pixels);
+  }
+  EXPECT_EQ(first.render(o).pixels, before.pixels) << "the first preview draws after the second is gone";
+}
+
 TEST(Measure, ComparisonReport) {
   const Mesh quad = test::make_grid(1, 1);
   PreviewMaps maps = maps_with_height([](float u) { return 0.1f * u; });
