@@ -12,6 +12,7 @@
 #include <embree3/rtcore.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_group.h>
 
 #include <algorithm>
 #include <array>
@@ -44,7 +45,16 @@ int choose_hit(const std::vector<RayHit>& hits, HitRule rule, float bunch, bool&
   if (rule == HitRule::front_only && !any_front) return -1;
   const bool fronts_only = (rule == HitRule::front_only || rule == HitRule::front_else_nearest) && any_front;
   // Bunches: maximal runs of hits closer than `bunch` to the previous one.
-  std::vector<int> bunch_of(static_cast<size_t>(n), 0);
+  // (At most 16 hits per direction: on the stack, left uninitialised: filled below.)
+  std::array<int, 64> small;
+  std::vector<int> large;
+  int* bunch_of_data = small.data();
+  if (n > static_cast<int>(small.size())) {
+    large.assign(static_cast<size_t>(n), 0);
+    bunch_of_data = large.data();
+  }
+  int* bunch_of = bunch_of_data;
+  bunch_of[0] = 0;
   for (int i = 1; i < n; ++i)
     bunch_of[static_cast<size_t>(i)] = bunch_of[static_cast<size_t>(i - 1)] + (hits[static_cast<size_t>(i)].d - hits[static_cast<size_t>(i - 1)].d > bunch);
   // Score (lower is better): |d| for the nearest rules, -|d| for the furthest; outward wins
@@ -94,16 +104,15 @@ const char* hit_rule_name(HitRule r) {
 BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progress& progress) {
   if (!has_uvs(low)) throw std::logic_error("bake: base mesh without UVs");
   BakeResult r;
-  const float reach = 0.05f * bounding_box(high).diagonal();
+  const auto high_box = bounding_box(high);  // one pass over the high mesh's vertices
+  const float reach = 0.05f * high_box.diagonal();
   r.front = o.front > 0 ? o.front : reach;
   r.back = o.back > 0 ? o.back : reach;
-  r.bunch = o.bunch > 0 ? o.bunch : 0.001f * bounding_box(high).diagonal();
+  r.bunch = o.bunch > 0 ? o.bunch : 0.001f * high_box.diagonal();
 
   // Ray start offset: far below the scale of any detail, far above float rounding of
   // coordinates relative to the base's centre.
-  const float eps = 1e-5f * std::max(bounding_box(high).diagonal(), bounding_box(low).diagonal());
-  const auto frames = compute_tangent_frames(low);
-  const auto samples = rasterize_uv(low, o.width, o.height);
+  const float eps = 1e-5f * std::max(high_box.diagonal(), bounding_box(low).diagonal());
   // Work relative to the base's centre (see RayScene).
   const Vec3f center = bounding_box(low).center();
   const Eigen::Vector3d origin(center[0], center[1], center[2]);
@@ -131,7 +140,7 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
       return out;
     };
     if (!keep) {
-      sub = high;
+      // The whole high mesh: the scene reads it directly (no copy).
       for (auto v : high.vertices()) normals.push_back(high.normal(v));
       if (want_uvs)
         for (auto f : high.faces()) {
@@ -172,63 +181,70 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
       }
     }
     Part part;
-    part.scene = std::make_unique<RayScene>(sub, origin);
+    part.scene = std::make_unique<RayScene>(keep ? sub : high, origin);
     part.normals = std::move(normals);
     part.uvs = std::move(uvs);
     parts.push_back(std::move(part));
     return static_cast<int>(parts.size()) - 1;
   };
-  if (!o.match_by_name) {
-    add_part(nullptr);
-  } else {
-    auto key = [](std::string name, bool is_high) {
-      std::transform(name.begin(), name.end(), name.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-      const size_t dot = name.rfind('.');
-      if (dot != std::string::npos && dot + 1 < name.size() &&
-          std::all_of(name.begin() + static_cast<long>(dot) + 1, name.end(), [](unsigned char c) { return std::isdigit(c) != 0; }))
-        name.erase(dot);
-      static const std::array<const char*, 3> high_suffixes{"_high", "_hi", "_hp"}, low_suffixes{"_low", "_lo", "_lp"};
-      for (const char* suffix : is_high ? high_suffixes : low_suffixes) {
-        const std::string sfx(suffix);
-        if (name.size() > sfx.size() && name.compare(name.size() - sfx.size(), sfx.size(), sfx) == 0) return name.substr(0, name.size() - sfx.size());
-      }
-      return name;
-    };
-    const auto& low_names = group_names(low);
-    const auto& high_names = group_names(high);
-    std::vector<int> low_part(low_names.size(), -1);
-    int whole = -1;
-    for (size_t g = 0; g < low_names.size(); ++g) {
-      const std::string k = key(low_names[g], false);
-      std::vector<bool> keep(high.n_faces(), false);
-      bool any = false;
-      for (auto f : high.faces()) {
-        const int hg = face_group(high, f);
-        if (hg >= 0 && static_cast<size_t>(hg) < high_names.size() && key(high_names[static_cast<size_t>(hg)], true) == k) {
-          keep[static_cast<size_t>(f.idx())] = true;
-          any = true;
+  // The scenes build (Embree, in parallel itself) while this thread rasterises the UV layout
+  // and prepares the maps; nothing below reads `parts` or `face_part` before the wait.
+  tbb::task_group building;
+  building.run([&] {
+    if (!o.match_by_name) {
+      add_part(nullptr);
+    } else {
+      auto key = [](std::string name, bool is_high) {
+        std::transform(name.begin(), name.end(), name.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+        const size_t dot = name.rfind('.');
+        if (dot != std::string::npos && dot + 1 < name.size() &&
+            std::all_of(name.begin() + static_cast<long>(dot) + 1, name.end(), [](unsigned char c) { return std::isdigit(c) != 0; }))
+          name.erase(dot);
+        static const std::array<const char*, 3> high_suffixes{"_high", "_hi", "_hp"}, low_suffixes{"_low", "_lo", "_lp"};
+        for (const char* suffix : is_high ? high_suffixes : low_suffixes) {
+          const std::string sfx(suffix);
+          if (name.size() > sfx.size() && name.compare(name.size() - sfx.size(), sfx.size(), sfx) == 0) return name.substr(0, name.size() - sfx.size());
+        }
+        return name;
+      };
+      const auto& low_names = group_names(low);
+      const auto& high_names = group_names(high);
+      std::vector<int> low_part(low_names.size(), -1);
+      int whole = -1;
+      for (size_t g = 0; g < low_names.size(); ++g) {
+        const std::string k = key(low_names[g], false);
+        std::vector<bool> keep(high.n_faces(), false);
+        bool any = false;
+        for (auto f : high.faces()) {
+          const int hg = face_group(high, f);
+          if (hg >= 0 && static_cast<size_t>(hg) < high_names.size() && key(high_names[static_cast<size_t>(hg)], true) == k) {
+            keep[static_cast<size_t>(f.idx())] = true;
+            any = true;
+          }
+        }
+        if (any) {
+          low_part[g] = add_part(&keep);
+          r.matched_parts.push_back(low_names[g]);
+        } else {
+          if (whole < 0) whole = add_part(nullptr);
+          low_part[g] = whole;
+          r.unmatched_parts.push_back(low_names[g]);
         }
       }
-      if (any) {
-        low_part[g] = add_part(&keep);
-        r.matched_parts.push_back(low_names[g]);
-      } else {
-        if (whole < 0) whole = add_part(nullptr);
-        low_part[g] = whole;
-        r.unmatched_parts.push_back(low_names[g]);
+      for (auto f : low.faces()) {
+        const int g = face_group(low, f);
+        if (g >= 0 && static_cast<size_t>(g) < low_part.size()) {
+          face_part[static_cast<size_t>(f.idx())] = low_part[static_cast<size_t>(g)];
+        } else {
+          if (whole < 0) whole = add_part(nullptr);
+          face_part[static_cast<size_t>(f.idx())] = whole;
+        }
       }
     }
-    for (auto f : low.faces()) {
-      const int g = face_group(low, f);
-      if (g >= 0 && static_cast<size_t>(g) < low_part.size()) {
-        face_part[static_cast<size_t>(f.idx())] = low_part[static_cast<size_t>(g)];
-      } else {
-        if (whole < 0) whole = add_part(nullptr);
-        face_part[static_cast<size_t>(f.idx())] = whole;
-      }
-    }
-  }
+  });
 
+  const auto frames = compute_tangent_frames(low);
+  const auto samples = rasterize_uv(low, o.width, o.height);
   r.displacement = Image(o.width, o.height, 1, 0.0f);
   r.normal_ts = Image(o.width, o.height, 3, 0.0f);
   r.normal_os = Image(o.width, o.height, 3, 0.0f);
@@ -244,38 +260,56 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
     Eigen::Vector3d ts, os;
     bool ambiguous = false;
   };
+  // Per base face, what its texels interpolate, read from the mesh once: corner positions
+  // relative to the origin (and the cage's), vertex normals, tangents, the handedness.
+  struct FaceCorners {
+    Eigen::Vector3d p[3], n[3], t[3], c[3];
+    double sign = 1;
+  };
+  std::vector<FaceCorners> corners(low.n_faces());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, low.n_faces(), 256), [&](const tbb::blocked_range<size_t>& fr) {
+    for (size_t fi = fr.begin(); fi < fr.end(); ++fi) {
+      FaceCorners& fc = corners[fi];
+      const auto hs = face_halfedges(low, FaceHandle(static_cast<int>(fi)));
+      for (size_t k = 0; k < 3; ++k) {
+        const auto v = low.to_vertex_handle(hs[k]);
+        const Vec3f& pv = low.point(v);
+        const Vec3f& nv = low.normal(v);
+        const Vec3f& tv = frames[static_cast<size_t>(hs[k].idx())].tangent;
+        fc.p[k] = Eigen::Vector3d(pv[0], pv[1], pv[2]) - origin;
+        fc.n[k] = Eigen::Vector3d(nv[0], nv[1], nv[2]);
+        fc.t[k] = Eigen::Vector3d(tv[0], tv[1], tv[2]);
+      }
+      fc.sign = frames[static_cast<size_t>(hs[0].idx())].sign;
+      if (o.cage) {
+        const auto cs = face_halfedges(*o.cage, FaceHandle(static_cast<int>(fi)));
+        for (size_t k = 0; k < 3; ++k) {
+          const Vec3f& cv = o.cage->point(o.cage->to_vertex_handle(cs[k]));
+          fc.c[k] = Eigen::Vector3d(cv[0], cv[1], cv[2]) - origin;
+        }
+      }
+    }
+  });
   auto trace = [&](int face, const std::array<float, 3>& bary, std::vector<RayHit>& hits, SampleValue& value) -> bool {
     const TexelSample s{face, bary, true};
     const Part& part = parts[static_cast<size_t>(face_part[static_cast<size_t>(face)])];
     const RayScene& scene = *part.scene;
     const std::vector<Vec3f>& high_normals = part.normals;
-    const auto hs = face_halfedges(low, FaceHandle(s.face));
+    const FaceCorners& fc = corners[static_cast<size_t>(s.face)];
     // Interpolated position, normal and MikkTSpace frame (unnormalised, as the shader).
     Eigen::Vector3d p = Eigen::Vector3d::Zero(), n = Eigen::Vector3d::Zero(), t = Eigen::Vector3d::Zero();
-    for (int k = 0; k < 3; ++k) {
-      const auto h = hs[static_cast<size_t>(k)];
-      const auto v = low.to_vertex_handle(h);
-      const double w = s.bary[static_cast<size_t>(k)];
-      const Vec3f& pv = low.point(v);
-      const Vec3f& nv = low.normal(v);
-      const Vec3f& tv = frames[static_cast<size_t>(h.idx())].tangent;
-      p += w * (Eigen::Vector3d(pv[0], pv[1], pv[2]) - origin);
-      n += w * Eigen::Vector3d(nv[0], nv[1], nv[2]);
-      t += w * Eigen::Vector3d(tv[0], tv[1], tv[2]);
+    for (size_t k = 0; k < 3; ++k) {
+      const double w = s.bary[k];
+      p += w * fc.p[k];
+      n += w * fc.n[k];
+      t += w * fc.t[k];
     }
     if (o.basis == BakeBasis::pn) {
       // The curved PN patch instead of the flat triangle: position and normal.
-      std::array<Eigen::Vector3d, 3> cp, cn;
-      for (int k = 0; k < 3; ++k) {
-        const auto v = low.to_vertex_handle(hs[static_cast<size_t>(k)]);
-        const Vec3f& pv = low.point(v);
-        const Vec3f& nv = low.normal(v);
-        cp[static_cast<size_t>(k)] = Eigen::Vector3d(pv[0], pv[1], pv[2]) - origin;
-        cn[static_cast<size_t>(k)] = Eigen::Vector3d(nv[0], nv[1], nv[2]);
-      }
+      const std::array<Eigen::Vector3d, 3> cp{fc.p[0], fc.p[1], fc.p[2]}, cn{fc.n[0], fc.n[1], fc.n[2]};
       pn_triangle(cp, cn, {s.bary[0], s.bary[1], s.bary[2]}, p, n);
     }
-    const double sign = frames[static_cast<size_t>(hs[0].idx())].sign;
+    const double sign = fc.sign;
     const Eigen::Vector3d b = sign * n.cross(t);
     if (!(n.norm() > 1e-12)) return false;  // opposite normals cancel: no direction to cast along
     const Eigen::Vector3d base_normal = n.normalized();  // what "front-facing" is measured against
@@ -284,10 +318,7 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
     if (o.cage) {
       // Toward the cage's point, and no further.
       Eigen::Vector3d c = Eigen::Vector3d::Zero();
-      for (int k = 0; k < 3; ++k) {
-        const Vec3f& cv = o.cage->point(o.cage->to_vertex_handle(face_halfedges(*o.cage, FaceHandle(s.face))[static_cast<size_t>(k)]));
-        c += s.bary[static_cast<size_t>(k)] * (Eigen::Vector3d(cv[0], cv[1], cv[2]) - origin);
-      }
+      for (size_t k = 0; k < 3; ++k) c += s.bary[k] * fc.c[k];
       const Eigen::Vector3d to_cage = c - p;
       if (to_cage.norm() > eps) {
         dir = to_cage.normalized();
@@ -306,9 +337,61 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
     // use is traced: the nearest rules stop after the first hit's bunch (continuations
     // reach only `bunch` further, cheap rays); the others go on through the reach.
     const bool all_hits = o.hit == HitRule::furthest;
-    auto gather = [&](int way, float limit) {
+    // The common case in one traversal: the loop below casts for the nearest hit, then asks
+    // whether anything lies within `bunch` behind it (usually nothing). collect() reports
+    // every triangle the ray crosses up to a little past the nearest one's bunch, with the
+    // values intersect() would give; when the nearest is unique and the rule stops at it
+    // and nothing lies behind it (with a margin), the loop's answer is known: that one hit.
+    // Anything else (a tie, more hits to follow, no filter support) runs the loop.
+    //
+    // `probe` < tfar: hits beyond `probe` cannot change the texel's value (see below), so
+    // a ray to `probe` that finds nothing settles it; if it finds something, the whole ray.
+    auto collect_first = [&](const Vec3f& org, const Vec3f& dir_s, int way, float tfar, float probe) -> bool {
+      if (all_hits || o.ignore_backfaces) return false;
+      RayScene::Candidates c;
+      const float window = 2.0f * r.bunch + 1e-6f * (tfar + eps);
+      bool complete = true;  // c holds every candidate up to the nearest's t + window
+      if (probe < tfar) {
+        if (!scene.collect(org, dir_s, 0.0f, probe, window, c)) return false;
+        if (c.n == 0) return true;
+        complete = false;  // only up to `probe`: enough if the checks below stay within it
+      }
+      if (complete && !scene.collect(org, dir_s, 0.0f, tfar, window, c)) return false;
+      if (c.n == 0) return true;  // intersect() misses
+      int first = 0;
+      for (int j = 1; j < c.n; ++j)
+        if (c.hit[j].t < c.hit[first].t) first = j;
+      if (!complete && !(c.hit[first].t + window <= probe)) {
+        if (!scene.collect(org, dir_s, 0.0f, tfar, window, c)) return false;
+        first = 0;
+        for (int j = 1; j < c.n; ++j)
+          if (c.hit[j].t < c.hit[first].t) first = j;
+      }
+      const RayScene::Candidate& h = c.hit[first];
+      for (int j = 0; j < c.n; ++j)
+        if (c.hit[j].t == h.t && c.hit[j].prim != h.prim) return false;  // a tie: Embree's pick
+      RayHit rh;
+      rh.d = static_cast<float>(way) * (h.t - eps);
+      rh.front = scene.face_normal(h.prim).dot(base_normal) > 0;
+      rh.prim = h.prim;
+      rh.u = h.u;
+      rh.v = h.v;
+      if (!(o.hit == HitRule::nearest || rh.front)) return false;  // the loop goes on
+      const float tnear = std::nextafter(h.t, tfar) + 1e-7f * (h.t + eps);
+      const float tstop = std::min(tfar, h.t + r.bunch);
+      if (tnear < tstop) {
+        // The loop's any-hit query over [tnear, tstop]: must find nothing, with a margin.
+        const float lo = h.t + 0.5f * (tnear - h.t), hi = tstop + 1e-6f * (tstop + eps) + 0.5f * r.bunch;
+        for (int j = 0; j < c.n; ++j)
+          if (c.hit[j].prim != h.prim && c.hit[j].t >= lo && c.hit[j].t <= hi) return false;
+      }
+      hits.push_back(rh);
+      return true;
+    };
+    auto gather = [&](int way, float limit, float probe) {
       const Vec3f org = start_at(-way * eps);
       const Vec3f dir_s = way > 0 ? d : -d;
+      if (collect_first(org, dir_s, way, limit + eps, probe)) return;
       float tnear = 0.0f, tfar = limit + eps;
       bool found_front = false;
       for (int k = 0; k < 16; ++k) {
@@ -334,8 +417,18 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
       }
     };
     hits.clear();
-    gather(+1, front_reach);
-    gather(-1, r.back);
+    const float no_probe = std::numeric_limits<float>::infinity();
+    gather(+1, front_reach, no_probe);
+    // When the outward ray found exactly one hit, at |d| = A, and the rule stops at it (a
+    // nearest rule; front-facing unless the rule is nearest), an inward hit further than
+    // A + bunch from the base can be neither the choice (it is further), nor an ambiguous
+    // second (its score is more than `bunch` worse), nor in the choice's bunch (the gap to
+    // it exceeds `bunch`): the inward ray need only reach A + bunch, with a margin, unless
+    // it finds something there (then it goes the whole way, as before).
+    float probe = no_probe;
+    if (hits.size() == 1 && !all_hits && !o.ignore_backfaces && (o.hit == HitRule::nearest || hits[0].front))
+      probe = std::abs(hits[0].d) + eps + 2.0f * r.bunch + 1e-6f * (r.back + eps);
+    gather(-1, r.back, probe);
     std::sort(hits.begin(), hits.end(), [](const RayHit& p1, const RayHit& p2) { return p1.d < p2.d; });
     bool unsure = false;
     const int chosen = choose_hit(hits, o.hit, r.bunch, unsure);
@@ -422,6 +515,7 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
     chart = uv_charts(low);
   }
 
+  building.wait();
   tbb::parallel_for(tbb::blocked_range<int>(0, o.height), [&](const tbb::blocked_range<int>& rows) {
     std::vector<RayHit> hits;
     for (int y = rows.begin(); y < rows.end(); ++y) {
@@ -469,43 +563,95 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
   });
   progress.end();
 
-  bool first = true;
   r.coverage = Image(o.width, o.height, 1, 0.0f);
   r.face_texels.assign(low.n_faces(), 0);
   r.face_misses.assign(low.n_faces(), 0);
   r.face_ambiguous.assign(low.n_faces(), 0);
-  for (size_t i = 0; i < written.size(); ++i) {
-    r.covered_texels += covered[i];
-    if (!covered[i]) continue;
-    const size_t face = static_cast<size_t>(samples[i].face);
-    ++r.face_texels[face];
-    r.coverage.pixels[i] = written[i] ? (ambiguous[i] ? 0.75f : 1.0f) : 0.5f;
-    r.face_misses[face] += !written[i];
-    r.face_ambiguous[face] += written[i] && ambiguous[i];
-    r.ambiguous += written[i] && ambiguous[i];
-    if (written[i]) {
-      ++r.hits;
+  // The report, over blocks of texels in parallel, then summed block by block in order
+  // (counts add up in any order; the range keeps the first of equal extremes, as one pass
+  // in texel order would).
+  struct Tally {
+    std::vector<uint32_t> texels, misses, ambiguous;  // per face
+    size_t covered = 0, hits = 0, misses_total = 0, ambiguous_total = 0;
+    bool any = false, nan = false;
+    float lo = 0, hi = 0;
+  };
+  const size_t texel_total = written.size();
+  // Blocks only where texels far outnumber faces (each block counts per face).
+  const size_t blocks = std::max<size_t>(1, std::min({size_t(16), texel_total / 65536, texel_total / (4 * low.n_faces() + 1)}));
+  std::vector<Tally> tallies(blocks);
+  tbb::parallel_for(size_t(0), blocks, [&](size_t b) {
+    Tally& t = tallies[b];
+    t.texels.assign(low.n_faces(), 0);
+    t.misses.assign(low.n_faces(), 0);
+    t.ambiguous.assign(low.n_faces(), 0);
+    const size_t i0 = texel_total * b / blocks, i1 = texel_total * (b + 1) / blocks;
+    for (size_t i = i0; i < i1; ++i) {
+      if (!written[i]) {
+        // Texels nobody wrote keep the flat answer until dilation reaches them; unwritten
+        // object-space normals: the base normal would need the face; up (z) until the
+        // dilation reaches them.
+        r.normal_ts.pixels[3 * i + 2] = 1.0f;
+        r.normal_os.pixels[3 * i + 2] = 1.0f;
+      }
+      t.covered += covered[i];
+      if (!covered[i]) continue;
+      const size_t face = static_cast<size_t>(samples[i].face);
+      ++t.texels[face];
+      r.coverage.pixels[i] = written[i] ? (ambiguous[i] ? 0.75f : 1.0f) : 0.5f;
+      t.misses[face] += !written[i];
+      t.ambiguous[face] += written[i] && ambiguous[i];
+      t.ambiguous_total += written[i] && ambiguous[i];
+      if (written[i]) {
+        ++t.hits;
+        const float d = r.displacement.pixels[i];
+        t.nan |= std::isnan(d);
+        if (!t.any) t.lo = t.hi = d;
+        t.lo = std::min(t.lo, d);
+        t.hi = std::max(t.hi, d);
+        t.any = true;
+      } else {
+        ++t.misses_total;
+      }
+    }
+  });
+  bool first = true, nan = false;
+  for (const Tally& t : tallies) {
+    r.covered_texels += t.covered;
+    r.hits += t.hits;
+    r.misses += t.misses_total;
+    r.ambiguous += t.ambiguous_total;
+    for (size_t f = 0; f < t.texels.size(); ++f) {
+      r.face_texels[f] += t.texels[f];
+      r.face_misses[f] += t.misses[f];
+      r.face_ambiguous[f] += t.ambiguous[f];
+    }
+    nan |= t.nan;
+    if (!t.any) continue;
+    if (first) r.min_displacement = r.max_displacement = t.lo;
+    r.min_displacement = std::min(r.min_displacement, t.lo);
+    r.max_displacement = std::max(r.max_displacement, t.hi);
+    first = false;
+  }
+  if (nan) {
+    // A NaN sticks or is skipped depending on where it comes: the one pass, exactly.
+    first = true;
+    for (size_t i = 0; i < texel_total; ++i) {
+      if (!covered[i] || !written[i]) continue;
       const float d = r.displacement.pixels[i];
       if (first) r.min_displacement = r.max_displacement = d;
       r.min_displacement = std::min(r.min_displacement, d);
       r.max_displacement = std::max(r.max_displacement, d);
       first = false;
-    } else {
-      ++r.misses;
     }
   }
-  // Texels nobody wrote keep the flat answer until dilation reaches them.
-  for (size_t i = 0; i < written.size(); ++i) {
-    if (!written[i]) r.normal_ts.pixels[3 * i + 2] = 1.0f;
+  // Every texel written (a layout that covers the map, and no misses): nothing to fill.
+  if (r.hits != written.size()) {
+    const auto sources = dilation_sources(written, o.width, o.height, o.dilate);
+    apply_dilation(r.displacement, sources);
+    apply_dilation(r.normal_ts, sources);
+    apply_dilation(r.normal_os, sources);
   }
-  // Unwritten object-space normals: the base normal would need the face; up (z) until the
-  // dilation reaches them.
-  for (size_t i = 0; i < written.size(); ++i)
-    if (!written[i]) r.normal_os.pixels[3 * i + 2] = 1.0f;
-  const auto sources = dilation_sources(written, o.width, o.height, o.dilate);
-  apply_dilation(r.displacement, sources);
-  apply_dilation(r.normal_ts, sources);
-  apply_dilation(r.normal_os, sources);
 
   r.displacement.metadata = {{"quantity", std::string("displacement")},
                              {"units", std::string("object")},

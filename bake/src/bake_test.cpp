@@ -7,9 +7,11 @@
 
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <random>
 
 namespace meso {
@@ -474,6 +476,82 @@ TEST(Dilate, CopiesTheNearestWrittenTexelUpToTheRadius) {
   EXPECT_EQ(written[0], 0);
   dilate(img, written, -1);
   EXPECT_EQ(img.at(0, 0), 5.0f);
+}
+
+// bake() splits its work among threads (rows, bands of the UV rasteriser, blocks of the
+// report, dilation rows and columns): the result must not depend on how many there are, for
+// every hit rule (the nearest rules take the one-traversal path, the others the hit loop),
+// with misses (short reach) and dilation.
+TEST(Bake, SameBitsWhateverTheThreadCount) {
+  BrickWallOptions w;
+  w.columns = 120;
+  w.rows = 60;
+  const Mesh high = make_brick_wall(w);
+  const Mesh low = make_brick_wall_base(w, 12, 6);
+  auto same = [](const Image& a, const Image& b) {
+    return a.pixels.size() == b.pixels.size() && std::memcmp(a.pixels.data(), b.pixels.data(), a.pixels.size() * sizeof(float)) == 0;
+  };
+  for (const HitRule rule : {HitRule::nearest, HitRule::furthest, HitRule::front_else_nearest, HitRule::front_only})
+    for (const float reach : {0.0f, 0.002f}) {
+      BakeOptions o;
+      o.width = 96;
+      o.height = 64;
+      o.hit = rule;
+      o.front = o.back = reach;
+      BakeResult one;
+      {
+        const tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
+        one = bake(low, high, o);
+      }
+      const BakeResult many = bake(low, high, o);
+      SCOPED_TRACE(std::string(hit_rule_name(rule)) + " reach " + std::to_string(reach));
+      EXPECT_GT(one.hits, 0u);
+      EXPECT_EQ(one.hits, many.hits);
+      EXPECT_EQ(one.misses, many.misses);
+      EXPECT_EQ(one.ambiguous, many.ambiguous);
+      EXPECT_EQ(one.face_texels, many.face_texels);
+      EXPECT_EQ(one.face_misses, many.face_misses);
+      EXPECT_EQ(one.face_ambiguous, many.face_ambiguous);
+      EXPECT_EQ(std::memcmp(&one.min_displacement, &many.min_displacement, sizeof(float)), 0);
+      EXPECT_EQ(std::memcmp(&one.max_displacement, &many.max_displacement, sizeof(float)), 0);
+      EXPECT_TRUE(same(one.displacement, many.displacement));
+      EXPECT_TRUE(same(one.normal_ts, many.normal_ts));
+      EXPECT_TRUE(same(one.normal_os, many.normal_os));
+      EXPECT_TRUE(same(one.coverage, many.coverage));
+    }
+}
+
+// rasterize_uv works in parallel bands of rows: the same samples as one band or one row at
+// a time.
+TEST(UvRaster, BandsGiveTheWholeImage) {
+  BrickWallOptions w;
+  const Mesh low = make_brick_wall_base(w, 9, 5);
+  const int width = 83, height = 47;
+  const auto whole = rasterize_uv(low, width, height);
+  const UvRasterizer raster(low, width, height);
+  const auto one_band = raster.rows(0, height);
+  ASSERT_EQ(whole.size(), one_band.size());
+  for (int y = 0; y < height; ++y) {
+    const auto row = raster.rows(y, y + 1);
+    for (int x = 0; x < width; ++x) {
+      const size_t i = static_cast<size_t>(y * width + x);
+      for (const TexelSample* s : {&one_band[i], &row[static_cast<size_t>(x)]}) {
+        ASSERT_EQ(whole[i].face, s->face) << x << "," << y;
+        ASSERT_EQ(whole[i].centre_inside, s->centre_inside) << x << "," << y;
+        ASSERT_EQ(std::memcmp(whole[i].bary.data(), s->bary.data(), sizeof(whole[i].bary)), 0) << x << "," << y;
+      }
+    }
+  }
+}
+
+// apply_dilation copies in index order when a source is itself filled from elsewhere (it
+// runs in parallel only when no source is).
+TEST(Dilate, ChainedSourcesCopyInIndexOrder) {
+  Image img(4, 1, 1, 0.0f);
+  for (int x = 0; x < 4; ++x) img.at(x, 0) = static_cast<float>(x + 1);
+  apply_dilation(img, {1, 2, 3, 3});
+  const float expect[4] = {2, 3, 4, 4};
+  for (int x = 0; x < 4; ++x) EXPECT_EQ(img.at(x, 0), expect[x]) << x;
 }
 
 }  // namespace

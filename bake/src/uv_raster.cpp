@@ -2,8 +2,12 @@
 
 #include "meso/core/uv_texels.hpp"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 
 namespace meso {
 
@@ -73,20 +77,35 @@ std::vector<TexelSample> UvRasterizer::rows(int row0, int row1) const {
     UvTriangle t{};
     std::copy(f.px, f.px + 3, t.px);
     std::copy(f.py, f.py + 3, t.py);
-    for_each_touched_texel(
-        t, width_, height_,
-        [&](int x, int y) {
-          TexelSample& s = at(x, y);
-          if (s.face >= 0) return;
-          const auto b = nearest_barycentrics(t, x + 0.5, y + 0.5);
-          s.face = f.index;
-          s.bary = {static_cast<float>(b[0]), static_cast<float>(b[1]), static_cast<float>(b[2])};
-        },
-        row0, row1);
+    // for_each_touched_texel's texels, skipping those already claimed before the overlap
+    // test (the test decides nothing for them).
+    int x0, x1, y0, y1;
+    if (!texels_touching(f.x_min, f.x_max, width_, x0, x1)) continue;
+    if (!texels_touching(f.y_min, f.y_max, height_, y0, y1)) continue;
+    y0 = std::max(y0, row0);
+    y1 = std::min(y1, row1 - 1);
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x) {
+        TexelSample& s = at(x, y);
+        if (s.face >= 0 || !triangle_overlaps_texel(t, x, y)) continue;
+        const auto b = nearest_barycentrics(t, x + 0.5, y + 0.5);
+        s.face = f.index;
+        s.bary = {static_cast<float>(b[0]), static_cast<float>(b[1]), static_cast<float>(b[2])};
+      }
   }
   return out;
 }
 
-std::vector<TexelSample> rasterize_uv(const Mesh& mesh, int width, int height) { return UvRasterizer(mesh, width, height).rows(0, height); }
+std::vector<TexelSample> rasterize_uv(const Mesh& mesh, int width, int height) {
+  // Bands of rows in parallel: a texel's sample depends only on the faces in face order,
+  // not on the band it is computed in.
+  const UvRasterizer raster(mesh, width, height);
+  std::vector<TexelSample> out(static_cast<size_t>(std::max(width, 0)) * static_cast<size_t>(std::max(height, 0)));
+  tbb::parallel_for(tbb::blocked_range<int>(0, std::max(height, 0), 8), [&](const tbb::blocked_range<int>& band) {
+    const std::vector<TexelSample> rows = raster.rows(band.begin(), band.end());
+    std::copy(rows.begin(), rows.end(), out.begin() + static_cast<std::ptrdiff_t>(static_cast<size_t>(band.begin()) * static_cast<size_t>(width)));
+  });
+  return out;
+}
 
 }  // namespace meso
