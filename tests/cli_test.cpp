@@ -71,12 +71,7 @@ TEST(Cli, UvpackPackMakesAUniqueMappingWithPadding) {
   EXPECT_GT(report["utilization"].get<double>(), 0.3);
   const Result check = run("uvpack check " + (dir / "packed.obj").string() + " --size 128 --padding 3 --fail-on overlap,shared,padding,outside");
   EXPECT_EQ(check.code, 0) << check.err;
-  Mesh flat = test::make_seamed_cube();
-  flat.release_halfedge_texcoords2D();
-  write_mesh(flat, dir / "nouv.ply");
-  const Result nouv = run("uvpack pack " + (dir / "nouv.ply").string() + " -o " + (dir / "x.obj").string());
-  EXPECT_EQ(nouv.code, 3);
-  EXPECT_FALSE(fs::exists(dir / "x.obj"));
+  // (A mesh without UVs is unwrapped first: Cli.UvpackPackUnwrapsAMeshWithoutUvs.)
 }
 
 TEST(Cli, BadUsageExitsTwo) {
@@ -511,3 +506,45 @@ TEST(CliMeshreduce, LocksAndTheTargetOutOfReach) {
 }  // namespace
 }  // namespace meso
 
+namespace meso {
+namespace {
+
+// uvpack pack on a mesh without UVs unwraps it (normal-cone charts, LSCM or ARAP) and packs
+// the charts; the checker finds a unique mapping with the padding. --unwrap replaces UVs a
+// mesh has; bad unwrap options are usage errors.
+TEST(Cli, UvpackPackUnwrapsAMeshWithoutUvs) {
+  test::TempDir dir;
+  Mesh flat = test::make_seamed_cube();
+  flat.release_halfedge_texcoords2D();
+  write_mesh(flat, dir / "nouv.ply");
+  for (const std::string method : {"lscm", "arap"}) {
+    const std::string out = (dir / ("unwrapped_" + method + ".obj")).string();
+    const Result r = run("--json uvpack pack " + (dir / "nouv.ply").string() + " -o " + out + " --size 128 --padding 2 --unwrap-method " + method);
+    ASSERT_EQ(r.code, 0) << r.err;
+    const auto report = nlohmann::json::parse(r.out);
+    EXPECT_EQ(report["charts"], 6);
+    EXPECT_EQ(report["unwrap"]["method"], method);
+    EXPECT_EQ(report["unwrap"]["charts"], 6);
+    EXPECT_NEAR(report["unwrap"]["stretch_l2"].get<double>(), 1.0, 1e-6);
+    for (const char* k : {"overlapping_faces", "shared_texel_faces", "padding_violations", "outside_faces", "flipped_faces"})
+      EXPECT_EQ(report["check"][k], 0) << k;
+    const Result check = run("uvpack check " + out + " --size 128 --padding 2 --fail-on overlap,shared,padding,outside,flipped");
+    EXPECT_EQ(check.code, 0) << check.err;
+  }
+  // A mesh with UVs keeps its charts unless --unwrap: the seamed cube's sides are its charts
+  // either way, but only --unwrap reports an unwrap.
+  write_mesh(test::make_seamed_cube(), dir / "cube.obj");
+  const Result kept = run("--json uvpack pack " + (dir / "cube.obj").string() + " -o " + (dir / "kept.obj").string() + " --size 64");
+  ASSERT_EQ(kept.code, 0) << kept.err;
+  EXPECT_FALSE(nlohmann::json::parse(kept.out).contains("unwrap"));
+  const Result rewrapped =
+      run("--json uvpack pack " + (dir / "cube.obj").string() + " -o " + (dir / "re.obj").string() + " --size 64 --unwrap --max-stretch 1.05 --chart-angle 30");
+  ASSERT_EQ(rewrapped.code, 0) << rewrapped.err;
+  EXPECT_EQ(nlohmann::json::parse(rewrapped.out)["unwrap"]["charts"], 6);
+  EXPECT_EQ(run("uvpack pack " + (dir / "cube.obj").string() + " -o " + (dir / "x.obj").string() + " --unwrap-method tutte").code, 2);
+  EXPECT_EQ(run("uvpack pack " + (dir / "cube.obj").string() + " -o " + (dir / "x.obj").string() + " --max-stretch 0.5").code, 2);
+  EXPECT_FALSE(fs::exists(dir / "x.obj"));
+}
+
+}  // namespace
+}  // namespace meso

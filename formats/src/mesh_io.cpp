@@ -187,6 +187,12 @@ Mesh read_mesh(const fs::path& path, MeshReadReport* report) {
     }
   }
   if (mesh.n_faces() == 0) throw InputError(name, "contains no triangles");
+  if (any_uv) {
+    // Boundary halfedges belong to no face and so got no UV above; OpenMesh leaves them
+    // uninitialised. Zero them so nothing downstream reads indeterminate values.
+    for (auto h : mesh.halfedges())
+      if (mesh.is_boundary(h)) mesh.set_texcoord2D(h, Vec2f(0, 0));
+  }
   rep.welded_vertices = mesh.n_vertices();
   rep.faces = mesh.n_faces();
   rep.had_normals = all_normals;
