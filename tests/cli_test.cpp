@@ -346,6 +346,30 @@ TEST_F(Skeleton, WholePipeline) {
   for (size_t i = 0; i < png.texel_count(); ++i) covered += png.pixels[4 * i + 3] > 0.5f;
   EXPECT_GT(covered, png.texel_count() / 10) << "the wall is in the frame";
 
+  // A turntable: N frames around the mesh, numbered from the --png name, all written or none.
+  const Result turntable = run("preview " + (d / "reduced.obj").string() + " --maps " + (d / "maps").string() +
+                               " --method relief --shadows soft --headless --png " + (d / "turn.png").string() +
+                               " --size 32x24 --turntable 3 --json");
+  ASSERT_EQ(turntable.code, 0) << turntable.err;
+  EXPECT_EQ(nlohmann::json::parse(turntable.out)["frames"].size(), 3u);
+  std::vector<float> alphas;
+  for (const char* f : {"turn_000.png", "turn_001.png", "turn_002.png"}) {
+    ASSERT_TRUE(fs::exists(d / f)) << f;
+    const Image frame = read_image(d / f);
+    EXPECT_EQ(frame.width, 32);
+    double sum = 0.0;
+    for (float v : frame.pixels) sum += v;
+    alphas.push_back(static_cast<float>(sum));
+  }
+  EXPECT_NE(alphas[0], alphas[1]) << "the frames are seen from different azimuths";
+  EXPECT_FALSE(fs::exists(d / "turn_003.png"));
+  EXPECT_EQ(run("preview " + (d / "reduced.obj").string() + " --maps " + (d / "maps").string() + " --png " +
+                (d / "w.png").string() + " --turntable 3")
+                .code,
+            2)
+      << "--turntable without --headless";
+  EXPECT_FALSE(fs::exists(d / "w_000.png"));
+
   const Result traced = run("preview " + (d / "reduced.obj").string() + " --maps " + (d / "maps").string() + " --streams " +
                             d.path().string() + " --method sphere-tracing --headless --png " + (d / "traced.png").string() +
                             " --size 48x32");

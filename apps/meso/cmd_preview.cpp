@@ -17,7 +17,8 @@ namespace meso::cli {
 namespace {
 
 struct Args {
-  std::string base, maps, streams, png, size = "512x512", shade = "lit", heatmaps;
+  std::string base, maps, streams, png, size = "512x512", shade = "lit", heatmaps, shadows = "none";
+  int turntable = 0;
   PreviewOptions options;
   bool headless = false, list = false, compare = false;
   int repetitions = 5;
@@ -98,6 +99,18 @@ void add_preview(CLI::App& app, Context& ctx) {
   sub->add_option("--iterations", args->options.iterations, "Main iteration budget of the method")->check(CLI::Range(1, 4096));
   sub->add_option("--shade", args->shade, "lit, uv (visible point's UV in R,G) or height")
       ->check(CLI::IsMember({"lit", "uv", "height"}));
+  sub->add_option("--shadows", args->shadows, "Self-shadowing of the lit shade: none, hard or soft (8 rays toward a disc light)")
+      ->check(CLI::IsMember({"none", "hard", "soft"}));
+  sub->add_option("--shadow-steps", args->options.shadow_steps, "Height samples along a shadow ray")->check(CLI::Range(1, 4096));
+  sub->add_option("--light-size", args->options.light_size, "Angular radius of the soft shadows' light, degrees")
+      ->check(CLI::Range(0.0, 45.0) & Finite);
+  sub->add_option("--light-elevation", args->options.camera.light_elevation, "Light: degrees above the mesh's mean plane")
+      ->check(CLI::Range(-90.0, 90.0) & Finite);
+  sub->add_option("--light-azimuth", args->options.camera.light_azimuth, "Light: degrees around the mean normal")->check(Finite);
+  sub->add_option("--turntable", args->turntable,
+                  "With --headless: N frames around the mesh (azimuth from --azimuth in steps of 360/N), written as "
+                  "PNG_000.png, PNG_001.png, ... from --png PNG.png")
+      ->check(CLI::Range(1, 3600));
   sub->add_flag("--compare", args->compare,
                 "Measure the methods against a CPU ray-traced reference of the true displaced surface (off screen): wrong "
                 "hits, RMSE/PSNR, texture fetches per pixel, draw time; --png writes the reference image");
@@ -148,6 +161,8 @@ void add_preview(CLI::App& app, Context& ctx) {
       PreviewOptions o = args->options;
       parse_size(args->size, o.width, o.height);
       o.shade = args->shade == "uv" ? PreviewShade::uv : args->shade == "height" ? PreviewShade::height : PreviewShade::lit;
+      o.shadows = args->shadows == "hard" ? PreviewShadows::hard : args->shadows == "soft" ? PreviewShadows::soft : PreviewShadows::none;
+      if (args->turntable > 0 && (!args->headless || args->compare)) throw UsageError("preview: --turntable needs --headless (and no --compare)");
       nlohmann::json base_report;
       const Mesh base = load_mesh(ctx.globals, args->base, base_report);
       if (!has_uvs(base)) throw InputError(args->base, "has no texture coordinates; the maps cannot be applied");
@@ -188,6 +203,29 @@ void add_preview(CLI::App& app, Context& ctx) {
       if (!args->headless) {
         run_window(base, maps, o);
         report = {{"command", "preview"}, {"method", o.method}};
+        return 0;
+      }
+      if (args->turntable > 0) {
+        // One context for every frame; all frames or none are written.
+        HeadlessPreview preview(base, maps);
+        const std::filesystem::path png(args->png);
+        OutputSet outputs;
+        std::vector<std::string> frames;
+        const auto t0 = std::chrono::steady_clock::now();
+        for (int k = 0; k < args->turntable; ++k) {
+          PreviewOptions f = o;
+          f.camera.azimuth = o.camera.azimuth + 360.0f * static_cast<float>(k) / static_cast<float>(args->turntable);
+          char suffix[16];
+          std::snprintf(suffix, sizeof suffix, "_%03d", k);
+          const std::filesystem::path file = png.parent_path() / (png.stem().string() + suffix + png.extension().string());
+          write_image(preview.render(f), outputs.add(file), PixelFormat::uint8);
+          frames.push_back(file.string());
+        }
+        const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+        outputs.commit();
+        info(ctx.globals, "wrote " + std::to_string(frames.size()) + " frames " + frames.front() + " ... " + frames.back());
+        report = {{"command", "preview"}, {"base", base_report}, {"method", o.method}, {"iterations", o.iterations},
+                  {"width", o.width}, {"height", o.height}, {"frames", frames}, {"ms_total", ms}};
         return 0;
       }
       const auto t0 = std::chrono::steady_clock::now();

@@ -1,7 +1,43 @@
 #line 1 6
 // The parallax family and main (see surface_common.glsl for the pieces and conventions).
 
+// Self-shadowing (survey section 6): the fraction of the light seen from the visible point
+// (uv, its height h). A shadow ray toward light direction L (object space) advances per unit
+// length by l = (L.t / |dp/du|, L.b / |dp/dv|, L.n) in (u, v, h), as the view ray does; it is
+// sampled at u_shadow_steps points up to the top of the height range, and blocked where the
+// height map rises above it (by more than a thousandth of the range, so the surface does not
+// shadow itself). Soft shadows average 8 rays toward points of a disc light around L.
+float shadow_ray(vec2 uv, float h, vec3 L, vec3 tn, vec3 bn, vec3 nn) {
+  vec3 l = vec3(dot(L, tn) / max(v_uv_scale.x, 1e-20), dot(L, bn) / max(v_uv_scale.y, 1e-20), dot(L, nn));
+  if (l.z <= 1e-6) return 1.0;  // the light is at or below the base plane: Lambert's term decides
+  float s_top = (u_h_max - h) / l.z;
+  float bias = 1e-3 * (u_h_max - u_h_min);
+  int steps = max(u_shadow_steps, 1);
+  for (int i = 1; i <= steps; ++i) {
+    float s = s_top * float(i) / float(steps);
+    if (height_lookup(uv + l.xy * s) > h + l.z * s + bias) return 0.0;
+  }
+  return 1.0;
+}
+
+float light_visibility(vec2 uv, vec3 tn, vec3 bn, vec3 nn) {
+  float h = height_lookup(uv);
+  if (u_shadows == 1) return shadow_ray(uv, h, u_light, tn, bn, nn);
+  // A frame around the light direction; 8 directions on a circle at 0.7 of the light's radius.
+  vec3 a = normalize(abs(u_light.z) < 0.9 ? cross(u_light, vec3(0, 0, 1)) : cross(u_light, vec3(1, 0, 0)));
+  vec3 c = cross(u_light, a);
+  float r = tan(u_light_size) * 0.7;
+  float sum = 0.0;
+  for (int k = 0; k < 8; ++k) {
+    float phi = 6.2831853 * float(k) / 8.0;
+    sum += shadow_ray(uv, h, normalize(u_light + r * (cos(phi) * a + sin(phi) * c)), tn, bn, nn);
+  }
+  return sum / 8.0;
+}
+
 void main() {
+  // Depth correction: per-pixel methods move it to the visible point below.
+  gl_FragDepth = gl_FragCoord.z;
   vec3 n = v_normal;
   vec3 t = v_tangent;
   // Interpolated normals or tangents can cancel (opposite vertex normals across a fold):
@@ -99,6 +135,14 @@ void main() {
     uv = v_uv + dir.xy * dig_trace(dir, amortised_fetches);
   }
 
+  // The visible point's depth, so that displaced surfaces intersect each other correctly (the
+  // point where the view ray is at the visible point's height: exact for the search methods,
+  // the parallax family's estimate for the others).
+  if (facing && u_method != kMesh && u_method != kTessellation && u_method != kBump) {
+    vec4 clip = u_view_projection * vec4(v_position + view * (height_lookup(uv) / dir.z), 1.0);
+    if (clip.w > 0.0) gl_FragDepth = clamp(0.5 * clip.z / clip.w + 0.5, 0.0, 1.0);
+  }
+
   out_fetches = vec2(float(g_fetches) + amortised_fetches, 1.0);
   if (u_shade == 1) {
     out_color = vec4(uv, 0.0, 1.0);
@@ -114,6 +158,7 @@ void main() {
   N = dot(N, N) > 1e-20 ? normalize(N) : nn;
   if (!gl_FrontFacing) N = -N;
   float diffuse = max(dot(N, u_light), 0.0);
+  if (u_shadows != 0 && diffuse > 0.0) diffuse *= light_visibility(uv, tn, bn, nn);
   vec3 albedo = vec3(0.78, 0.74, 0.70);
   vec3 color = albedo * (0.12 + 0.88 * diffuse);
   out_color = vec4(pow(color, vec3(1.0 / 2.2)), 1.0);

@@ -25,6 +25,10 @@ uniform vec3 u_light;         // unit vector toward the light, object space
 uniform int u_method;
 uniform int u_iterations;
 uniform int u_shade;          // 0 lit, 1 uv of the visible point, 2 height of the visible point
+uniform mat4 u_view_projection;  // object space to clip space (depth correction)
+uniform int u_shadows;        // 0 none, 1 hard, 2 soft (PreviewShadows)
+uniform int u_shadow_steps;   // samples along a shadow ray
+uniform float u_light_size;   // radians, angular radius of the soft shadows' light
 uniform float u_h_min;
 uniform float u_h_max;
 uniform sampler3D u_sdf;      // meso streams sdf: R = distance in units of u (bound when used)

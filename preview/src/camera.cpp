@@ -74,7 +74,11 @@ CameraPose frame_camera(const Mesh& base, const PreviewCamera& cam, float aspect
   CameraPose pose;
   pose.view_projection = multiply(proj, view);
   pose.eye = OpenMesh::vector_cast<Vec3f>(eye);
-  pose.light = OpenMesh::vector_cast<Vec3f>((n + e2 * 0.6 - e1 * 0.4).normalize());
+  {
+    // Elevation above the mean plane, azimuth from e1 toward e2 (the defaults: n + 0.6 e2 - 0.4 e1).
+    const double el = static_cast<double>(cam.light_elevation) * pi / 180.0, laz = static_cast<double>(cam.light_azimuth) * pi / 180.0;
+    pose.light = OpenMesh::vector_cast<Vec3f>((n * std::sin(el) + (e1 * std::cos(laz) + e2 * std::sin(laz)) * std::cos(el)).normalize());
+  }
   pose.eye_d = eye;
   pose.right = r;
   pose.up = u;

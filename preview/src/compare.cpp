@@ -115,6 +115,7 @@ Comparison compare_methods(const Mesh& base, const PreviewMaps& maps, const Comp
     MethodComparison r;
     r.name = m;
     PreviewOptions mo = o.view;
+    mo.shadows = PreviewShadows::none;  // the reference casts no shadow rays
     mo.method = m;
     mo.shade = PreviewShade::uv;
     const Image uv = gpu.render(mo, &r.fetches);

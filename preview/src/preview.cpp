@@ -272,6 +272,12 @@ void run_window(const Mesh& base, const PreviewMaps& maps, const PreviewOptions&
     }
     if (key == GLFW_KEY_EQUAL || key == GLFW_KEY_KP_ADD) s->options.iterations = std::min(s->options.iterations * 2, 1024);
     if (key == GLFW_KEY_MINUS || key == GLFW_KEY_KP_SUBTRACT) s->options.iterations = std::max(s->options.iterations / 2, 1);
+    if (key == GLFW_KEY_S)  // none -> hard -> soft shadows
+      s->options.shadows = static_cast<PreviewShadows>((static_cast<int>(s->options.shadows) + 1) % 3);
+    if (key == GLFW_KEY_LEFT) s->options.camera.light_azimuth -= 10.0f;
+    if (key == GLFW_KEY_RIGHT) s->options.camera.light_azimuth += 10.0f;
+    if (key == GLFW_KEY_UP) s->options.camera.light_elevation = std::min(s->options.camera.light_elevation + 5.0f, 90.0f);
+    if (key == GLFW_KEY_DOWN) s->options.camera.light_elevation = std::max(s->options.camera.light_elevation - 5.0f, 0.0f);
     if (key == GLFW_KEY_ESCAPE || key == GLFW_KEY_Q) glfwSetWindowShouldClose(w, GLFW_TRUE);
   });
   SurfaceRenderer renderer(base, maps);
@@ -283,8 +289,10 @@ void run_window(const Mesh& base, const PreviewMaps& maps, const PreviewOptions&
     glFinish();
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     char title[256];
-    std::snprintf(title, sizeof title, "meso preview | %s | %d iterations | view %.1f deg | %.2f ms",
-                  state.options.method.c_str(), state.options.iterations, static_cast<double>(state.options.camera.view_angle), ms);
+    static const char* const shadow_names[3] = {"no shadows", "hard shadows", "soft shadows"};
+    std::snprintf(title, sizeof title, "meso preview | %s | %d iterations | view %.1f deg | %s | %.2f ms", state.options.method.c_str(),
+                  state.options.iterations, static_cast<double>(state.options.camera.view_angle),
+                  shadow_names[static_cast<int>(state.options.shadows)], ms);
     glfwSetWindowTitle(window, title);
     glfwSwapBuffers(window);
     glfwWaitEventsTimeout(0.1);

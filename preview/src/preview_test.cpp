@@ -798,6 +798,89 @@ TEST(Measure, PreviewsCoexist) {
   EXPECT_EQ(first.render(o).pixels, before.pixels) << "the first preview draws after the second is gone";
 }
 
+// Depth correction: a ramp 0.1 u high on a quad at z = 0, and above it a second quad at
+// z = 0.05 whose UVs all read the ramp's foot (u in [0, 0.001], height ~0). Seen from above, the
+// displaced ramp rises through the second quad at u ~ 0.5: where u > 0.5 the ramp is in
+// front, although its base quad lies behind the other one.
+TEST(Preview, DepthCorrectionLetsDisplacedSurfacesIntersect) {
+  Mesh two = test::make_grid(1, 1);
+  std::vector<Mesh::VertexHandle> v;
+  for (const auto& [x, y] : {std::pair{0.0f, 0.0f}, {1.0f, 0.0f}, {1.0f, 1.0f}, {0.0f, 1.0f}}) v.push_back(two.add_vertex(Vec3f(x, y, 0.05f)));
+  for (const auto& f : {two.add_face(v[0], v[1], v[2]), two.add_face(v[0], v[2], v[3])})
+    for (auto h : two.fh_range(f)) {
+      const Vec3f p = two.point(two.to_vertex_handle(h));
+      two.set_texcoord2D(h, Vec2f(0.001f * p[0], p[1]));  // within the ramp's flat first half texel
+    }
+  compute_angle_weighted_normals(two);
+  const PreviewMaps maps = maps_with_height([](float u) { return 0.1f * u; });
+  for (const char* method : {"parallax", "pom", "relief"}) {
+    PreviewOptions o = view_options(method, 0.0f, 0.0f, 64, PreviewShade::uv);
+    const Image img = render_headless(two, maps, o);
+    const std::array<double, 16> inv = inverse(frame_camera(two, o.camera, 1.0f).view_projection);
+    size_t ramp = 0, ramp_ok = 0, flat = 0, flat_ok = 0;
+    for (int y = 0; y < o.height; ++y)
+      for (int x = 0; x < o.width; ++x) {
+        if (img.at(x, y, 3) < 0.5f) continue;
+        const ViewRay r = view_ray(inv, x, y, o.width, o.height);
+        const double s = (0.05 - r.o[2]) / r.d[2], u = r.o[0] + s * r.d[0];  // where the ray meets z = 0.05
+        // Away from the quads' borders at both heights (a per-pixel method draws nothing
+        // beyond its base triangle).
+        const double s0 = -r.o[2] / r.d[2], x0 = r.o[0] + s0 * r.d[0], y0 = r.o[1] + s0 * r.d[1], y1 = r.o[1] + s * r.d[1];
+        if (std::min({x0, y0, y1}) < 0.02 || std::max({x0, y0, y1}) > 0.98) continue;
+        if (u > 0.55 && u < 0.98) {
+          ++ramp;
+          const bool ok = std::abs(img.at(x, y, 0) - u) < 0.05;  // the ramp's own u, near u
+          ramp_ok += ok;
+        } else if (u > 0.02 && u < 0.45) {
+          ++flat;
+          flat_ok += img.at(x, y, 0) < 0.002f;  // the upper quad
+        }
+      }
+    EXPECT_GT(ramp, 400u) << method;
+    EXPECT_GT(flat, 400u) << method;
+    EXPECT_EQ(ramp_ok, ramp) << method << ": the ramp shows where it rises above the upper quad";
+    EXPECT_EQ(flat_ok, flat) << method << ": the upper quad hides the ramp where the ramp is lower";
+  }
+}
+
+// Self-shadowing: a box 0.1 high lit from 20 degrees above the plane. Hard shadows darken the
+// plain behind it and never brighten anything; soft shadows darken no more than none, less
+// than hard on the whole, and leave penumbra pixels between lit and shadowed.
+TEST(Preview, ShadowsDarkenBehindABoxAndSoftOnesLieBetween) {
+  const Mesh quad = test::make_grid(1, 1);
+  const PreviewMaps maps = cone_maps(ConeScene::plateau, Border::clamp);
+  PreviewOptions o = view_options("relief", 30.0f, 35.0f, 256, PreviewShade::lit);
+  o.camera.light_elevation = 20.0f;
+  o.camera.light_azimuth = 0.0f;  // toward +x of the frame: shadows fall toward -x
+  HeadlessPreview gpu(quad, maps);
+  const Image none = gpu.render(o);
+  o.shadows = PreviewShadows::hard;
+  const Image hard = gpu.render(o);
+  o.shadows = PreviewShadows::soft;
+  const Image soft = gpu.render(o);
+  size_t darker = 0, covered = 0, penumbra = 0;
+  double sum_none = 0, sum_hard = 0, sum_soft = 0;
+  for (size_t i = 0; i < none.texel_count(); ++i) {
+    if (none.pixels[4 * i + 3] < 0.5f) continue;
+    ++covered;
+    const float n = none.pixels[4 * i], h = hard.pixels[4 * i], s = soft.pixels[4 * i];
+    ASSERT_LE(h, n + 1e-6f) << "pixel " << i;
+    ASSERT_LE(s, n + 1e-6f) << "pixel " << i;
+    darker += h < n - 0.05f;
+    penumbra += s < n - 0.02f && s > 0.2f * n;  // partly lit (ambient alone is ~0.4 of lit after sRGB)
+    sum_none += n;
+    sum_hard += h;
+    sum_soft += s;
+  }
+  std::printf("hard shadows darken %zu of %zu pixels; mean red none %.4f, soft %.4f, hard %.4f; %zu penumbra pixels\n", darker, covered,
+              sum_none / static_cast<double>(covered), sum_soft / static_cast<double>(covered), sum_hard / static_cast<double>(covered), penumbra);
+  EXPECT_GT(darker, covered / 50);
+  EXPECT_LT(darker, covered / 2);
+  EXPECT_LT(sum_soft, sum_none);
+  EXPECT_GT(sum_soft, sum_hard);
+  EXPECT_GT(penumbra, 0u);
+}
+
 TEST(Measure, ComparisonReport) {
   const Mesh quad = test::make_grid(1, 1);
   PreviewMaps maps = maps_with_height([](float u) { return 0.1f * u; });

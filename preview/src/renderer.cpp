@@ -427,6 +427,9 @@ void SurfaceRenderer::draw(const PreviewOptions& o, int width, int height) {
   glUniform1i(glGetUniformLocation(prog, "u_method"), method_index(o.method));
   glUniform1i(glGetUniformLocation(prog, "u_iterations"), o.iterations);
   glUniform1i(glGetUniformLocation(prog, "u_shade"), static_cast<int>(o.shade));
+  glUniform1i(glGetUniformLocation(prog, "u_shadows"), static_cast<int>(o.shadows));
+  glUniform1i(glGetUniformLocation(prog, "u_shadow_steps"), std::clamp(o.shadow_steps, 1, 4096));
+  glUniform1f(glGetUniformLocation(prog, "u_light_size"), o.light_size * 3.14159265f / 180.0f);
   glUniform1f(glGetUniformLocation(prog, "u_h_min"), h_min_);
   glUniform1f(glGetUniformLocation(prog, "u_h_max"), h_max_);
   const int cone = o.method == "cone" ? 0 : o.method == "relaxed-cone" ? 1 : -1;

@@ -69,6 +69,16 @@ struct PreviewCamera {
   float view_angle = 30.0f;
   float azimuth = 0.0f;
   float zoom = 1.0f;  // > 1 moves closer
+  // The light, fixed relative to the mesh: degrees above the mean plane, and around the mean
+  // normal from the same reference direction as azimuth (the defaults: n + 0.6 e2 - 0.4 e1).
+  float light_elevation = 54.20424f;
+  float light_azimuth = 123.690068f;
+};
+
+enum class PreviewShadows {
+  none,
+  hard,  // a shadow ray toward the light through the height field (linear search)
+  soft,  // 8 shadow rays toward points of a disc light of angular radius light_size, averaged
 };
 
 struct PreviewOptions {
@@ -79,6 +89,13 @@ struct PreviewOptions {
   // sphere tracing: loop passes, sphere steps and the fine march near the surface alike).
   int iterations = 32;
   PreviewShade shade = PreviewShade::lit;
+  // Self-shadowing of the lit shade: from the visible point toward the light, shadow_steps
+  // samples of the height map up to the top of the height range (not counted as fetches: they
+  // shade, they do not find the visible point; compare_methods renders without shadows, as
+  // the reference has none).
+  PreviewShadows shadows = PreviewShadows::none;
+  int shadow_steps = 32;
+  float light_size = 4.0f;  // degrees, angular radius of the soft shadows' light
 };
 
 // Method names this build renders, in the order of the survey.
@@ -240,8 +257,10 @@ Image fetch_heatmap(const Image& fetches, double max_fetches);
 
 // Opens a window and renders interactively until it is closed: left drag orbits, wheel
 // zooms, 1-9 and 0 choose among the first ten methods, Tab (Shift+Tab) goes to the next
-// (previous) method, +/- change the iteration budget; methods whose stream was not loaded
-// are skipped. Throws InternalError when no display is available.
+// (previous) method, +/- change the iteration budget, S cycles the shadows (none, hard,
+// soft), the arrow keys move the light; methods whose stream was not loaded are skipped; the
+// title line shows the method, its budget, the view angle, the shadows and the frame time.
+// Throws InternalError when no display is available.
 void run_window(const Mesh& base, const PreviewMaps& maps, const PreviewOptions& options);
 
 }  // namespace meso
