@@ -413,42 +413,36 @@ void build_scene(Scene& s, const Options& o, const std::vector<std::string>& wan
   for (const std::string& m : preview_methods()) {
     const bool want = std::find(wanted.begin(), wanted.end(), m) != wanted.end();
     const std::string file = required_stream(m);
-    Image* slot = stream_for(s.maps, m);
-    if (!file.empty() && slot) {
+    if (!file.empty()) {
       if (!made.count(file)) {
         const auto t0 = std::chrono::steady_clock::now();
         bool ok = write_stream(file, field, o.relief, dir / file);
         if (ok) {
           try {
-            *slot = read_image(dir / file);
-            check_stream_matches(m, *slot, s.maps.displacement, (dir / file).string());
+            load_stream(s.maps, s.base, m, dir / file);
             std::printf("  %s: %s in %.2f s\n", s.name.c_str(), file.c_str(),
                         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
           } catch (const Error& e) {
             std::printf("  %s: %s unusable: %s\n", s.name.c_str(), file.c_str(), e.what());
-            *slot = Image();
+            clear_stream(s.maps, m);
             ok = false;
           }
         }
         made[file] = ok;
-      } else if (made[file] && slot->empty()) {
-        *slot = read_image(dir / file);
+      } else if (made[file] && !has_stream(s.maps, m)) {
+        load_stream(s.maps, s.base, m, dir / file);
       }
       if (!made[file]) {
         if (want) s.skipped.push_back(m + ": needs " + file + ", which this program cannot make");
         continue;
       }
-    } else if (!file.empty()) {
-      if (want) s.skipped.push_back(m + ": needs " + file + " but PreviewMaps has no slot for it");
-      continue;
     }
     if (want) s.methods.push_back(m);
   }
   // The tiling rule the previewer and the reference follow (sampling.hpp's maps_tile): a
   // loaded stream made with border wrap.
-  for (const std::string& m : preview_methods()) {
-    const Image* st = stream_for(s.maps, m);
-    if (!st || st->empty()) continue;
+  for (const Image* st : {&s.maps.sdf, &s.maps.cone, &s.maps.relaxed_cone, &s.maps.pyramid, &s.maps.vdm_weights}) {
+    if (st->empty()) continue;
     const auto it = st->metadata.find("border");
     if (it != st->metadata.end() && std::holds_alternative<std::string>(it->second) && std::get<std::string>(it->second) == "wrap") s.wrap = true;
   }

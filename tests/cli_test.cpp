@@ -57,7 +57,7 @@ TEST(Cli, HelpVersionAndMethodList) {
   EXPECT_EQ(methods.code, 0);
   EXPECT_EQ(methods.out,
             "mesh\ntessellation\nbump\nparallax\noffset-limited\nslope\niterative-parallax\nsteep\nrelief\npom\ncone\nrelaxed-"
-            "cone\npyramid\nsphere-tracing\ndig\n");
+            "cone\npyramid\nsphere-tracing\ndig\nvdm\ndstream\n");
 }
 
 // uvpack pack: the seamed cube's six charts packed with padding; the checker agrees.
@@ -302,10 +302,15 @@ TEST_F(Skeleton, WholePipeline) {
   EXPECT_EQ(vdm_report["directions"], 3 * 4 * vdm_report["curvatures"].size());
   EXPECT_LT(vdm_report["bytes"].get<double>(), vdm_report["raw_bytes"].get<double>());
   EXPECT_EQ(run("streams vdm " + (d / "maps" / "displacement.exr").string() + " -o " + (d / "v.exr").string() + " --curvatures 0,x").code, 2);
-  EXPECT_EQ(run("streams vdm " + (d / "maps" / "displacement.exr").string() + " -o " + (d / "v.exr").string() + " --curvatures 0 --mesh " +
-                (d / "reduced.obj").string())
-                .code,
-            2);
+  EXPECT_EQ(run("streams vdm " + (d / "maps" / "displacement.exr").string() + " -o " + (d / "v.exr").string() + " --curvatures 1,0").code, 2)
+      << "curvatures must increase";
+  // --mesh gives the relief; --curvatures, when given, the slices.
+  const Result given = run("streams vdm " + (d / "maps" / "displacement.exr").string() + " -o " + (d / "v.exr").string() +
+                           " --theta 2 --phi 2 --curvatures 0 --json --mesh " + (d / "reduced.obj").string());
+  ASSERT_EQ(given.code, 0) << given.err;
+  const auto given_report = nlohmann::json::parse(given.out);
+  EXPECT_EQ(given_report["curvatures"], nlohmann::json::array({0.0}));
+  EXPECT_EQ(given_report["relief"], vdm_report["relief"]);
 
   // Compressed displacement vertex streams: the file's size is the documented layout.
   const Result dstream = run("streams dstream --low " + (d / "reduced.obj").string() + " --high " + (d / "high.obj").string() + " -o " +
@@ -345,6 +350,29 @@ TEST_F(Skeleton, WholePipeline) {
   size_t covered = 0;
   for (size_t i = 0; i < png.texel_count(); ++i) covered += png.pixels[4 * i + 3] > 0.5f;
   EXPECT_GT(covered, png.texel_count() / 10) << "the wall is in the frame";
+
+  // vdm and dstream draw the streams made above (vdm.exr, dstream.bin); a stream made for
+  // another base mesh is refused naming the file.
+  for (const char* method : {"vdm", "dstream"}) {
+    const std::string frame = (d / (std::string(method) + ".png")).string();
+    const Result r = run("preview " + (d / "reduced.obj").string() + " --maps " + (d / "maps").string() + " --streams " + d.path().string() +
+                         " --method " + method + " --headless --png " + frame + " --size 48x32 --iterations 4 --lod-distance 2");
+    ASSERT_EQ(r.code, 0) << method << ": " << r.err;
+    const Image img = read_image(frame);
+    size_t on = 0;
+    for (size_t i = 0; i < img.texel_count(); ++i) on += img.pixels[4 * i + 3] > 0.5f;
+    EXPECT_GT(on, img.texel_count() / 10) << method;
+  }
+  std::filesystem::create_directories(d / "other");
+  ASSERT_EQ(run("streams dstream --low " + (d / "base.obj").string() + " --high " + (d / "high.obj").string() + " -o " +
+                (d / "other" / "dstream.bin").string() + " --levels 1")
+                .code,
+            0);
+  const Result foreign = run("preview " + (d / "reduced.obj").string() + " --maps " + (d / "maps").string() + " --streams " +
+                             (d / "other").string() + " --method dstream --headless --png " + (d / "f.png").string());
+  EXPECT_EQ(foreign.code, 3);
+  EXPECT_NE(foreign.err.find("dstream.bin"), std::string::npos) << foreign.err;
+  EXPECT_FALSE(fs::exists(d / "f.png"));
 
   // A turntable: N frames around the mesh, numbered from the --png name, all written or none.
   const Result turntable = run("preview " + (d / "reduced.obj").string() + " --maps " + (d / "maps").string() +

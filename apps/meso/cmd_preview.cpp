@@ -82,7 +82,7 @@ void add_preview(CLI::App& app, Context& ctx) {
   CLI::App* sub = app.add_subcommand("preview", "Render the base mesh with its baked maps (window, or headless to PNG)");
   sub->add_option("base", args->base, "Base mesh with UVs");
   sub->add_option("--maps", args->maps, "Folder written by meso bake (displacement.exr, normal_ts.png)");
-  sub->add_option("--streams", args->streams, "Folder of meso streams outputs (sdf.exr for sphere-tracing, cone.exr for cone, relaxed-cone.exr for relaxed-cone, pyramid.exr for pyramid); default: the --maps folder");
+  sub->add_option("--streams", args->streams, "Folder of meso streams outputs (sdf.exr for sphere-tracing, cone.exr for cone, relaxed-cone.exr for relaxed-cone, pyramid.exr for pyramid, vdm.exr for vdm, dstream.bin for dstream); default: the --maps folder");
   CLI::Option* method_option = sub->add_option(
       "--method", args->options.method,
       "Displacement method (see --list-methods); with --compare a comma-separated list or 'all' (the default: every "
@@ -107,6 +107,14 @@ void add_preview(CLI::App& app, Context& ctx) {
   sub->add_option("--light-elevation", args->options.camera.light_elevation, "Light: degrees above the mesh's mean plane")
       ->check(CLI::Range(-90.0, 90.0) & Finite);
   sub->add_option("--light-azimuth", args->options.camera.light_azimuth, "Light: degrees around the mean normal")->check(Finite);
+  sub->add_option("--morph", args->options.morph,
+                  "dstream: morph every vertex toward the coarser level by this much (1: the level drawn, 0: the coarser level's surface); "
+                  "default: by distance (--lod-distance)")
+      ->check(CLI::Range(0.0, 1.0) & Finite);
+  sub->add_option("--lod-distance", args->options.lod_distance,
+                  "dstream: vertices nearer than this (object units) take the level drawn (the finest within --iterations segments per "
+                  "edge), farther than twice this the coarser level's surface, morphing between (0: no morph)")
+      ->check(CLI::NonNegativeNumber & Finite);
   sub->add_option("--turntable", args->turntable,
                   "With --headless: N frames around the mesh (azimuth from --azimuth in steps of 360/N), written as "
                   "PNG_000.png, PNG_001.png, ... from --png PNG.png")
@@ -178,7 +186,7 @@ void add_preview(CLI::App& app, Context& ctx) {
         const std::string stream = required_stream(method);
         if (stream.empty()) continue;
         const std::filesystem::path file = streams_dir / stream;
-        const std::string producer = stream.substr(0, stream.size() - 4);  // "sdf", "cone", "relaxed-cone"
+        const std::string producer = stream.substr(0, stream.find('.'));  // "sdf", "cone", "vdm", "dstream", ...
         const bool needed = args->compare ? std::find(wanted.begin(), wanted.end(), method) != wanted.end() : o.method == method;
         // Loaded when there: in a window (every method can be switched to), and for --compare all.
         const bool optional = args->compare ? all : !args->headless;
@@ -186,14 +194,12 @@ void add_preview(CLI::App& app, Context& ctx) {
           throw InputError(file.string(), "missing: method " + method + " needs it (meso streams " + producer + " " +
                                               (dir / "displacement.exr").string() + " -o " + file.string() + ")");
         if (!needed && (!optional || !std::filesystem::exists(file))) continue;
-        Image& slot = *stream_for(maps, method);
         try {
-          slot = read_image(file);
-          check_stream_matches(method, slot, maps.displacement, file.string());
+          load_stream(maps, base, method, file);
         } catch (const InputError& e) {
           if (needed) throw;
           warn(ctx.globals, std::string(e.what()) + " (" + method + " unavailable)");  // window or --compare all
-          slot = Image();
+          clear_stream(maps, method);
         }
       }
       if (args->compare) {

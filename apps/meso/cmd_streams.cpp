@@ -10,6 +10,7 @@
 #include "meso/bake/curvature.hpp"
 #include "meso/bake/displacement_stream.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <cmath>
@@ -146,9 +147,9 @@ void add_streams(CLI::App& app, Context& ctx) {
   vdm_cmd->add_option("--theta", vdm->options.theta, "View angles from the normal (sampled at the centres of [0, --theta-max])")->check(CLI::Range(1, 256))->capture_default_str();
   vdm_cmd->add_option("--theta-max", vdm->options.theta_max, "Largest view angle from the normal, degrees")->check(CLI::Range(1.0, 90.0))->capture_default_str();
   vdm_cmd->add_option("--phi", vdm->options.phi, "Azimuths around the normal")->check(CLI::Range(1, 1024))->capture_default_str();
-  auto* curv = vdm_cmd->add_option("--curvatures", vdm->curvatures, "Comma-separated curvatures along the view direction, per unit of u (default: 0, a flat base)");
-  vdm_cmd->add_option("--mesh", vdm->mesh, "Base mesh: curvature range (quadric fits) and relief from its size, instead of --curvatures/--relief")->excludes(curv);
-  vdm_cmd->add_option("--curvature-steps", vdm->curvature_steps, "With --mesh: curvature samples over the mesh's range")->check(CLI::Range(1, 64))->capture_default_str();
+  vdm_cmd->add_option("--curvatures", vdm->curvatures, "Comma-separated curvatures along the view direction, per unit of u, increasing (default: 0, a flat base; with --mesh: from the mesh)");
+  vdm_cmd->add_option("--mesh", vdm->mesh, "Base mesh: relief from its size (unless --relief) and curvature slices from quadric fits (unless --curvatures)");
+  vdm_cmd->add_option("--curvature-steps", vdm->curvature_steps, "With --mesh: curvature samples over the mesh's range (5th percentile of k2 to 95th of k1; 1: the median mean curvature)")->check(CLI::Range(1, 64))->capture_default_str();
   vdm_cmd->add_option("--relief", vdm->options.relief, "Height range in units of u (default 0.1, or from --mesh)")->check(CLI::PositiveNumber & Finite);
   vdm_cmd->add_option("--max-error", vdm->max_error, "Largest RMS error of the compressed table, units of u")->check(CLI::NonNegativeNumber & Finite)->capture_default_str();
   vdm_cmd->add_option("--max-rank", vdm->max_rank, "Largest number of PCA components")->check(CLI::Range(0, 4096))->capture_default_str();
@@ -167,6 +168,7 @@ void add_streams(CLI::App& app, Context& ctx) {
           if (!parse_finite(item, v)) throw UsageError("--curvatures: '" + item + "' is not a number");
           o.curvatures.push_back(v);
         }
+        if (!std::is_sorted(o.curvatures.begin(), o.curvatures.end())) throw UsageError("--curvatures: the values must increase");
       }
       nlohmann::json mesh_report;
       if (!vdm->mesh.empty()) {
@@ -174,52 +176,26 @@ void add_streams(CLI::App& app, Context& ctx) {
         if (!has_uvs(base)) throw InputError(vdm->mesh, "has no texture coordinates; the VDM needs the base mesh's UV scale");
         const double per_u = object_length_per_uv(base);
         if (!(per_u > 0)) throw InputError(vdm->mesh, "has no area in 3D or in UV");
-        const std::vector<VertexCurvature> k = fit_curvature(base);
+        const std::vector<VertexCurvature> k = vdm->curvatures.empty() ? fit_curvature(base) : std::vector<VertexCurvature>{};
+        std::vector<float> k1, k2;
         double lo = 0, hi = 0;
         for (const VertexCurvature& v : k) {
+          if (v.rings == 0) continue;  // not fitted
+          k1.push_back(v.k1);
+          k2.push_back(v.k2);
           lo = std::min(lo, static_cast<double>(v.k2));
           hi = std::max(hi, static_cast<double>(v.k1));
         }
-        o.curvatures.clear();
-        const int steps = hi - lo > 1e-9 ? vdm->curvature_steps : 1;
-        for (int i = 0; i < steps; ++i)
-          o.curvatures.push_back(static_cast<float>((steps == 1 ? 0.5 * (lo + hi) : lo + (hi - lo) * i / (steps - 1)) * per_u));
+        if (vdm->curvatures.empty()) o.curvatures = vdm_curvature_slices(k1, k2, per_u, vdm->curvature_steps);
         if (!vdm->relief_given) o.relief = static_cast<float>(std::max(1e-6, field.scale / per_u));
         mesh_report["object_length_per_u"] = per_u;
         mesh_report["curvature_range"] = {lo, hi};
+        mesh_report["curvatures_per_u"] = o.curvatures;
       }
       const VdmTable table = build_vdm(field, o, progress);
       const CompressedVdm c = compress_vdm(table, vdm->max_error, vdm->max_rank);
-      // Part 0: weights, W x H, one channel per component (one zero channel at rank 0).
-      const int channels = std::max(1, c.rank);
-      Image weights(table.width, table.height, channels, 0.0f);
-      for (size_t i = 0; i < weights.texel_count(); ++i)
-        for (int k = 0; k < c.rank; ++k) weights.pixels[i * static_cast<size_t>(channels) + static_cast<size_t>(k)] = c.weights[i * static_cast<size_t>(c.rank) + static_cast<size_t>(k)];
-      // Part 1: (rank + 1) x directions, column 0 the mean, column k + 1 component k.
-      Image basis(c.rank + 1, c.directions, 1, 0.0f);
-      for (int j = 0; j < c.directions; ++j) {
-        basis.at(0, j) = c.mean[static_cast<size_t>(j)];
-        for (int k = 0; k < c.rank; ++k) basis.at(k + 1, j) = c.basis[static_cast<size_t>(j) * static_cast<size_t>(c.rank) + static_cast<size_t>(k)];
-      }
-      std::string curvature_list;
-      for (float v : o.curvatures) curvature_list += (curvature_list.empty() ? "" : ",") + std::to_string(v);
-      weights.metadata = height_field_metadata(field);
-      weights.metadata["quantity"] = std::string("view-dependent displacement (PCA)");
-      weights.metadata["theta"] = table.theta;
-      weights.metadata["theta_max"] = o.theta_max;
-      weights.metadata["phi"] = table.phi;
-      weights.metadata["curvatures"] = curvature_list;
-      weights.metadata["relief"] = o.relief;
-      weights.metadata["rank"] = c.rank;
-      weights.metadata["rms_error"] = static_cast<float>(c.rms_error);
-      weights.metadata["max_error"] = static_cast<float>(c.max_error);
-      weights.metadata["miss"] = kVdmMiss;
-      weights.metadata["layout"] = std::string(
-          "d(texel, dir) = basis[0][dir] + sum_k weights[texel][k] basis[k+1][dir], units of u; dir = (curvature * theta + i) * phi + j; "
-          "theta_i = (i + 0.5) / theta * theta_max, phi_j = 360 j / phi degrees from +u toward +v; d < -0.5: no hit");
-      basis.metadata["quantity"] = std::string("view-dependent displacement basis: column 0 mean, column k + 1 component k, row = direction");
       OutputSet outputs;
-      write_image_parts({weights, basis}, outputs.add(vdm_args->output), vdm_args->half ? PixelFormat::half : PixelFormat::float32);
+      write_image_parts(vdm_images(c, field, o), outputs.add(vdm_args->output), vdm_args->half ? PixelFormat::half : PixelFormat::float32);
       outputs.commit();
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       const size_t raw = table.distance.size() * sizeof(float);

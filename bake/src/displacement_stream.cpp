@@ -21,6 +21,31 @@ int vertex_index(int s, int i, int j) { return i * (s + 1) - i * (i - 1) / 2 + j
 
 }  // namespace
 
+void displacement_stream_point(const Mesh& base, int t, int s, int i, int j, OpenMesh::Vec3d& p, OpenMesh::Vec3d& n) {
+  const auto hs = face_halfedges(base, FaceHandle(t));
+  std::array<VertexHandle, 3> v;
+  for (int k = 0; k < 3; ++k) v[static_cast<size_t>(k)] = base.to_vertex_handle(hs[static_cast<size_t>(k)]);
+  auto P = [&](int k) { return OpenMesh::vector_cast<OpenMesh::Vec3d>(base.point(v[static_cast<size_t>(k)])); };
+  auto N = [&](int k) { return OpenMesh::vector_cast<OpenMesh::Vec3d>(base.normal(v[static_cast<size_t>(k)])); };
+  // Corner weights: a = (s - i - j) / s, b = i / s, c = j / s. On an edge (one weight zero)
+  // interpolate from the edge's lower-numbered vertex: shared edges then give bit-identical
+  // points in both triangles.
+  const int w[3] = {s - i - j, i, j};
+  int zero = -1;
+  for (int k = 0; k < 3; ++k)
+    if (w[k] == 0) zero = k;
+  if (zero >= 0) {
+    int e0 = (zero + 1) % 3, e1 = (zero + 2) % 3;
+    if (v[static_cast<size_t>(e1)].idx() < v[static_cast<size_t>(e0)].idx()) std::swap(e0, e1);
+    const double f = static_cast<double>(w[e1]) / s;  // from e0 toward e1
+    p = P(e0) + f * (P(e1) - P(e0));
+    n = N(e0) + f * (N(e1) - N(e0));
+  } else {
+    p = (w[0] * P(0) + w[1] * P(1) + w[2] * P(2)) / s;
+    n = (w[0] * N(0) + w[1] * N(1) + w[2] * N(2)) / s;
+  }
+}
+
 DisplacementStream sample_displacement_stream(const Mesh& base, const Mesh& high, const DisplacementStreamOptions& o,
                                               Progress& progress) {
   DisplacementStream out;
@@ -60,39 +85,13 @@ DisplacementStream sample_displacement_stream(const Mesh& base, const Mesh& high
   progress.begin("dstream", static_cast<uint64_t>(out.triangles));
   tbb::parallel_for(tbb::blocked_range<int>(0, out.triangles), [&](const tbb::blocked_range<int>& range) {
     for (int t = range.begin(); t < range.end(); ++t) {
-      const auto hs = face_halfedges(base, FaceHandle(t));
-      std::array<VertexHandle, 3> v;
-      for (int k = 0; k < 3; ++k) v[static_cast<size_t>(k)] = base.to_vertex_handle(hs[static_cast<size_t>(k)]);
-      auto P = [&](int k) {
-        const Vec3f q = base.point(v[static_cast<size_t>(k)]);
-        return Eigen::Vector3d(q[0], q[1], q[2]);
-      };
-      auto N = [&](int k) {
-        const Vec3f q = base.normal(v[static_cast<size_t>(k)]);
-        return Eigen::Vector3d(q[0], q[1], q[2]);
-      };
       for (DisplacementLevel& level : out.levels) {
         const int s = level.segments;
         for (int i = 0; i <= s; ++i)
           for (int j = 0; j <= s - i; ++j) {
-            // Corner weights: a = (s - i - j) / s, b = i / s, c = j / s. On an edge (one
-            // weight zero) interpolate from the edge's lower-numbered vertex: shared edges
-            // then give bit-identical points in both triangles.
-            const int w[3] = {s - i - j, i, j};
-            Eigen::Vector3d p, n;
-            int zero = -1;
-            for (int k = 0; k < 3; ++k)
-              if (w[k] == 0) zero = k;
-            if (zero >= 0) {
-              int e0 = (zero + 1) % 3, e1 = (zero + 2) % 3;
-              if (v[static_cast<size_t>(e1)].idx() < v[static_cast<size_t>(e0)].idx()) std::swap(e0, e1);
-              const double f = static_cast<double>(w[e1]) / s;  // from e0 toward e1
-              p = P(e0) + f * (P(e1) - P(e0));
-              n = N(e0) + f * (N(e1) - N(e0));
-            } else {
-              p = (w[0] * P(0) + w[1] * P(1) + w[2] * P(2)) / s;
-              n = (w[0] * N(0) + w[1] * N(1) + w[2] * N(2)) / s;
-            }
+            OpenMesh::Vec3d pm, nm;
+            displacement_stream_point(base, t, s, i, j, pm, nm);
+            const Eigen::Vector3d p(pm[0], pm[1], pm[2]), n(nm[0], nm[1], nm[2]);
             double d = n.norm() > 1e-12 ? cast(p, n) : std::nan("");
             if (std::isnan(d)) {
               d = 0;
@@ -220,6 +219,76 @@ void write_displacement_stream(const EncodedStream& e, int base_vertices, int ba
     }
   }
   if (!f) throw InternalError(path + ": write failed");
+}
+
+}  // namespace meso
+
+namespace meso {
+
+EncodedStream read_displacement_stream(const std::string& path, int* base_vertices, int* base_triangles) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw InputError(path, "cannot be opened");
+  auto u32 = [&](const char* what) {
+    unsigned char b[4];
+    if (!f.read(reinterpret_cast<char*>(b), 4)) throw InputError(path, std::string("is truncated (") + what + ")");
+    return static_cast<uint32_t>(b[0]) | static_cast<uint32_t>(b[1]) << 8 | static_cast<uint32_t>(b[2]) << 16 | static_cast<uint32_t>(b[3]) << 24;
+  };
+  auto f32 = [&](const char* what) {
+    const uint32_t bits = u32(what);
+    float v;
+    std::memcpy(&v, &bits, 4);
+    return v;
+  };
+  char magic[8];
+  if (!f.read(magic, 8) || std::memcmp(magic, "MESODSTR", 8) != 0) throw InputError(path, "is not a meso dstream file (no MESODSTR header)");
+  const uint32_t version = u32("version");
+  if (version != 1) throw InputError(path, "has dstream version " + std::to_string(version) + "; this build reads version 1");
+  const uint32_t levels = u32("level count");
+  const uint32_t nv = u32("vertex count"), nt = u32("triangle count");
+  if (levels < 1 || levels > 7) throw InputError(path, "has " + std::to_string(levels) + " levels (1 to 7 are valid)");
+  if (nt >= (1u << 22) || nv > (1u << 30)) throw InputError(path, "has implausible base mesh counts");
+  EncodedStream e;
+  e.min_value = f32("range");
+  e.max_value = f32("range");
+  if (!std::isfinite(e.min_value) || !std::isfinite(e.max_value) || e.max_value < e.min_value)
+    throw InputError(path, "has an invalid quantisation range");
+  for (uint32_t l = 0; l < levels; ++l) {
+    const uint32_t s = u32("segments"), count = u32("level size");
+    if (s != (1u << l)) throw InputError(path, "level " + std::to_string(l) + " has " + std::to_string(s) + " segments; expected " + std::to_string(1u << l));
+    const uint64_t per = static_cast<uint64_t>(s + 1) * (s + 2) / 2;
+    if (count != per * nt) throw InputError(path, "level " + std::to_string(l) + " has " + std::to_string(count) + " vertices; expected " + std::to_string(per * nt));
+    std::vector<uint64_t> vertices(count);
+    for (uint32_t k = 0; k < count; ++k) {
+      const uint64_t lo = u32("vertices"), hi = u32("vertices");
+      vertices[k] = lo | hi << 32;
+      const DecodedVertex d = decode_vertex(vertices[k], e.min_value, e.max_value);
+      if (d.triangle >= nt || d.i + d.j > static_cast<int>(s))
+        throw InputError(path, "vertex " + std::to_string(k) + " of level " + std::to_string(l) + " is out of range");
+    }
+    e.segments.push_back(static_cast<int>(s));
+    e.vertices.push_back(std::move(vertices));
+  }
+  *base_vertices = static_cast<int>(nv);
+  *base_triangles = static_cast<int>(nt);
+  return e;
+}
+
+std::vector<Vec3f> decode_displacement_level(const Mesh& base, const EncodedStream& stream, int level, float morph) {
+  const std::vector<uint64_t>& in = stream.vertices.at(static_cast<size_t>(level));
+  const int s = stream.segments.at(static_cast<size_t>(level));
+  std::vector<Vec3f> out(in.size());
+  for (size_t k = 0; k < in.size(); ++k) {
+    const DecodedVertex d = decode_vertex(in[k], stream.min_value, stream.max_value);
+    OpenMesh::Vec3d p, n;
+    displacement_stream_point(base, static_cast<int>(d.triangle), s, d.i, d.j, p, n);
+    // (1 - m) c + m v: exactly c at m = 0 and exactly v at m = 1.
+    const double m = morph;
+    const double value = (1.0 - m) * d.coarse + m * d.value;
+    const double len = n.norm();
+    if (len > 0) p += n * (value / len);
+    out[k] = Vec3f(static_cast<float>(p[0]), static_cast<float>(p[1]), static_cast<float>(p[2]));
+  }
+  return out;
 }
 
 }  // namespace meso

@@ -1,5 +1,6 @@
 #include "meso/bake/displacement_stream.hpp"
 
+#include "meso/core/error.hpp"
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -7,7 +8,11 @@
 #include <array>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <map>
+#include <string>
+#include <utility>
+#include <vector>
 
 namespace meso {
 namespace {
@@ -135,6 +140,69 @@ TEST(DisplacementStream, EncodedVerticesAreEightBytesWithinTheirBound) {
   size_t expected = 8 + 4 * 4 + 8;
   for (const auto& level : e.vertices) expected += 8 + 8 * level.size();
   EXPECT_EQ(std::filesystem::file_size(dir / "d.bin"), expected);
+}
+
+// The file reads back exactly; decoding gives P + d N within the quantisation bound; morph 0
+// gives the coarser level's own positions bit for bit at the vertices the levels share.
+TEST(DisplacementStream, FileRoundTripAndDecodedLevelsMorphToTheCoarserOne) {
+  // A curved base (a piece of cylinder) under a tilted high plane.
+  const Mesh base = test::make_parametric(
+      3, 2, [](double u, double v) { return Vec3f(static_cast<float>(std::cos(1.2 * u)), static_cast<float>(std::sin(1.2 * u)), static_cast<float>(v)); },
+      false, false);
+  DisplacementStreamOptions o;
+  o.levels = 4;
+  const DisplacementStream s = sample_displacement_stream(base, plane(0.1f, 0.05f, 0.2f), o);
+  const EncodedStream e = encode_displacement_stream(s);
+  test::TempDir dir;
+  const std::string file = (dir / "d.bin").string();
+  write_displacement_stream(e, static_cast<int>(base.n_vertices()), static_cast<int>(base.n_faces()), file);
+  int nv = 0, nt = 0;
+  const EncodedStream r = read_displacement_stream(file, &nv, &nt);
+  EXPECT_EQ(nv, static_cast<int>(base.n_vertices()));
+  EXPECT_EQ(nt, static_cast<int>(base.n_faces()));
+  EXPECT_EQ(r.min_value, e.min_value);
+  EXPECT_EQ(r.max_value, e.max_value);
+  EXPECT_EQ(r.segments, e.segments);
+  EXPECT_EQ(r.vertices, e.vertices);
+
+  const double bound = (s.max_value - s.min_value) / (2.0 * kDisplacementSteps);
+  for (int l = 0; l < 4; ++l) {
+    const std::vector<Vec3f> fine = decode_displacement_level(base, r, l);
+    const int n = r.segments[static_cast<size_t>(l)];
+    size_t k = 0;
+    for (int t = 0; t < s.triangles; ++t)
+      for (int i = 0; i <= n; ++i)
+        for (int j = 0; j <= n - i; ++j, ++k) {
+          OpenMesh::Vec3d p, nn;
+          displacement_stream_point(base, t, n, i, j, p, nn);
+          const OpenMesh::Vec3d exact = p + nn.normalized() * static_cast<double>(s.levels[static_cast<size_t>(l)].value[k]);
+          EXPECT_LE((OpenMesh::vector_cast<OpenMesh::Vec3d>(fine[k]) - exact).norm(), bound + 1e-6) << l << " " << k;
+        }
+    if (l == 0) continue;
+    const std::vector<Vec3f> morphed = decode_displacement_level(base, r, l, 0.0f), coarse = decode_displacement_level(base, r, l - 1);
+    const int c = n / 2, per = (n + 1) * (n + 2) / 2, cper = (c + 1) * (c + 2) / 2;
+    for (int t = 0; t < s.triangles; ++t)
+      for (int i = 0, k2 = 0; i <= n; ++i)
+        for (int j = 0; j <= n - i; ++j, ++k2)
+          if (i % 2 == 0 && j % 2 == 0) {
+            const int ci = i / 2, cj = j / 2, ck = ci * (c + 1) - ci * (ci - 1) / 2 + cj;
+            EXPECT_EQ(morphed[static_cast<size_t>(t * per + k2)], coarse[static_cast<size_t>(t * cper + ck)]) << l << " " << t << " " << i << "," << j;
+          }
+  }
+
+  // Bad files: one InputError naming the file.
+  for (const auto& [bytes, what] : std::vector<std::pair<std::string, std::string>>{
+           {"MESODSTX", "magic"}, {std::string("MESODSTR\x01\0\0\0", 12), "truncated"}}) {
+    const std::string bad = (dir / "bad.bin").string();
+    std::ofstream(bad, std::ios::binary) << bytes;
+    try {
+      read_displacement_stream(bad, &nv, &nt);
+      ADD_FAILURE() << what;
+    } catch (const InputError& err) {
+      EXPECT_NE(std::string(err.what()).find(bad), std::string::npos) << what;
+    }
+  }
+  EXPECT_THROW(read_displacement_stream((dir / "none.bin").string(), &nv, &nt), InputError);
 }
 
 }  // namespace

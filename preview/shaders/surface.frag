@@ -1,4 +1,4 @@
-#line 1 6
+#line 1 7
 // The parallax family and main (see surface_common.glsl for the pieces and conventions).
 
 // Self-shadowing (survey section 6): the fraction of the light seen from the visible point
@@ -133,12 +133,14 @@ void main() {
     return;
   } else if (u_method == kDig && facing) {
     uv = v_uv + dir.xy * dig_trace(dir, amortised_fetches);
+  } else if (u_method == kVdm && facing) {
+    if (!vdm_trace(view, tn, bn, nn, dir, uv)) discard;  // the ray left the bent height field
   }
 
   // The visible point's depth, so that displaced surfaces intersect each other correctly (the
   // point where the view ray is at the visible point's height: exact for the search methods,
   // the parallax family's estimate for the others).
-  if (facing && u_method != kMesh && u_method != kTessellation && u_method != kBump) {
+  if (facing && u_method != kMesh && u_method != kTessellation && u_method != kDstream && u_method != kBump) {
     vec4 clip = u_view_projection * vec4(v_position + view * (height_lookup(uv) / dir.z), 1.0);
     if (clip.w > 0.0) gl_FragDepth = clamp(0.5 * clip.z / clip.w + 0.5, 0.0, 1.0);
   }

@@ -7,6 +7,8 @@ layout(location = 1) in vec3 in_normal;
 layout(location = 2) in vec2 in_uv;
 layout(location = 3) in vec4 in_tangent;
 layout(location = 4) in vec2 in_uv_scale;
+layout(location = 5) in vec3 in_curvature_dir;  // principal direction d1 (vdm)
+layout(location = 6) in vec2 in_curvature;      // k1, k2, 1 / object units (vdm)
 
 uniform mat4 u_view_projection;
 // An affine map of normalised device x and y after the projection: (scale x, offset x,
@@ -20,6 +22,8 @@ out vec3 v_tangent;
 flat out float v_sign;  // from the first corner (glProvokingVertex), as the baker takes it
 out vec2 v_uv;
 out vec2 v_uv_scale;
+out vec3 v_curvature_dir;
+out vec2 v_curvature;
 
 void main() {
   v_position = in_position;
@@ -28,6 +32,8 @@ void main() {
   v_sign = in_tangent.w;
   v_uv = in_uv;
   v_uv_scale = in_uv_scale;
+  v_curvature_dir = in_curvature_dir;
+  v_curvature = in_curvature;
   gl_Position = u_view_projection * vec4(in_position, 1.0);
   gl_Position.xy = gl_Position.xy * u_ndc_transform.xz + u_ndc_transform.yw * gl_Position.w;
 }

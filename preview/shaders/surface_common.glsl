@@ -2,11 +2,11 @@
 // The fragment stage of the previewer, in pieces compiled as one shader in this order:
 // surface_common.glsl (this: inputs, uniforms, the fetch counter), footprint.glsl (exact
 // intersection with the bilinear surface over one texel), cone_stepping.glsl, pyramid.glsl,
-// sphere_tracing.glsl, dig.glsl, surface.frag (the parallax family and main). Methods of the survey
+// sphere_tracing.glsl, dig.glsl, vdm.glsl, surface.frag (the parallax family and main). Methods of the survey
 // (Szirmay-Kalos & Umenhoffer) by section: bump 4.1.1 (normal map only), parallax 4.1.2,
 // offset-limited 4.1.3, slope 4.1.4, iterative-parallax 4.2.1, steep 4.3.1, relief 4.4.1,
-// pom 4.4.2, cone 4.3.5, relaxed-cone 4.4.3, pyramid 4.3.3, sphere-tracing 4.3.4; dig: the
-// depth-interval-grid paper (dig.glsl).
+// pom 4.4.2, cone 4.3.5, relaxed-cone 4.4.3, pyramid 4.3.3, sphere-tracing 4.3.4, vdm 6.3;
+// dig: the depth-interval-grid paper (dig.glsl). dstream (dstream.vert) is per vertex.
 // Heights are in object units along the base normal, positive outward (meso bake's
 // displacement.exr), in [u_h_min, u_h_max]. The ray is expressed in (u, v, h) coordinates:
 // per unit of object-space length it advances dot(V,t)/|dp/du| in u, dot(V,b)/|dp/dv| in v
@@ -52,11 +52,11 @@ uniform float u_stream_scale;  // object height = bias + scale * normalised heig
 uniform float u_stream_bias;
 uniform int u_stream_wrap;     // 1: border wrap (the map tiles), 0: clamp
 
-// Method numbers: the order of preview_methods() in renderer.cpp (per-vertex methods, mesh
-// and tessellation, shade the point their geometry puts there: no search here).
+// Method numbers: the order of preview_methods() in renderer.cpp (per-vertex methods, mesh,
+// tessellation and dstream, shade the point their geometry puts there: no search here).
 const int kMesh = 0, kTessellation = 1, kBump = 2, kParallax = 3, kOffsetLimited = 4, kSlope = 5,
           kIterativeParallax = 6, kSteep = 7, kRelief = 8, kPom = 9, kCone = 10, kRelaxedCone = 11,
-          kPyramid = 12, kSphereTracing = 13, kDig = 14;
+          kPyramid = 12, kSphereTracing = 13, kDig = 14, kVdm = 15, kDstream = 16;
 const int kReliefBinarySteps = 8;
 const int kConeBisectionSteps = 24;  // relaxed cones: halvings of the step that crossed the surface
 const float kConeFar = 1e30;

@@ -25,6 +25,8 @@ out vec3 v_tangent;
 flat out float v_sign;
 out vec2 v_uv;
 out vec2 v_uv_scale;
+out vec3 v_curvature_dir;  // unused by the per-vertex methods (vdm's input)
+out vec2 v_curvature;
 
 void main() {
   precise vec3 w = gl_TessCoord;
@@ -40,5 +42,7 @@ void main() {
   v_sign = e_tangent[0].w;  // the base triangle's first corner, as the baker takes it
   v_uv = uv;
   v_uv_scale = w.x * e_uv_scale[0] + w.y * e_uv_scale[1] + w.z * e_uv_scale[2];
+  v_curvature_dir = vec3(0.0);
+  v_curvature = vec2(0.0);
   gl_Position = u_view_projection * vec4(v_position, 1.0);
 }

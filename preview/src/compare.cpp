@@ -80,16 +80,14 @@ Comparison compare_methods(const Mesh& base, const PreviewMaps& maps, const Comp
   const auto& known = preview_methods();
   if (methods.empty()) {
     for (const auto& m : known) {
-      const Image* stream = stream_for(maps, m);
-      if (!stream || !stream->empty()) methods.push_back(m);
+      if (has_stream(maps, m)) methods.push_back(m);
     }
   }
   // Usage errors before any work.
   for (const auto& m : methods) {
     if (std::find(known.begin(), known.end(), m) == known.end())
       throw UsageError("unknown preview method '" + m + "' (see --list-methods)");
-    const Image* stream = stream_for(maps, m);
-    if (stream && stream->empty()) throw UsageError("method " + m + " needs the stream " + required_stream(m) + " (meso streams)");
+    if (!has_stream(maps, m)) throw UsageError("method " + m + " needs the stream " + required_stream(m) + " (meso streams)");
   }
   Comparison c;
   c.view = o.view;

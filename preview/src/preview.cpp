@@ -23,19 +23,14 @@ namespace {
 void check_maps(const PreviewMaps& maps, const std::string& method) {
   if (maps.displacement.empty() || maps.normal_ts.empty()) throw std::logic_error("preview: maps are empty");
   method_index(method);  // unknown method: UsageError before any OpenGL work
-  const Image* stream = stream_for(maps, method);
-  if (stream && stream->empty()) {
+  if (!has_stream(maps, method)) {
     const std::string file = required_stream(method);
-    const std::string what = method == "sphere-tracing" ? "the distance field " : method == "pyramid" ? "the max pyramid " : "the cone map ";
-    throw UsageError("method " + method + " needs " + what + file + " (meso streams " + file.substr(0, file.size() - 4) +
+    throw UsageError("method " + method + " needs the stream " + file + " (meso streams " + file.substr(0, file.find('.')) +
                      ", then --streams DIR)");
   }
 }
 
-bool streams_available(const PreviewMaps& maps, const std::string& method) {
-  const Image* stream = stream_for(maps, method);
-  return !stream || !stream->empty();
-}
+bool streams_available(const PreviewMaps& maps, const std::string& method) { return has_stream(maps, method); }
 
 // An OpenGL 4.5 core context without any window system: EGL on Mesa's surfaceless platform
 // (llvmpipe when there is no GPU). Rendering goes to a framebuffer object.
@@ -148,12 +143,17 @@ struct HeadlessPreview::Impl {
   // Binds a target of the options' size, drawn into.
   void draw(const PreviewOptions& o) {
     check_maps(maps, o.method);
+    bind_target(o);
+    renderer->draw(o, o.width, o.height);
+  }
+  // Makes the context current with a target of the options' size bound (there is no default
+  // framebuffer: every draw, even with rasterisation off, needs one).
+  void bind_target(const PreviewOptions& o) {
     context.make_current();
     if (!target || target->width() != o.width || target->height() != o.height) {
       target.reset();
       target = std::make_unique<OffscreenTarget>(o.width, o.height);
     }
-    renderer->draw(o, o.width, o.height);
   }
 };
 
@@ -198,6 +198,13 @@ double HeadlessPreview::time_draw(const PreviewOptions& o, int repetitions) {
   std::sort(ms.begin(), ms.end());
   const size_t n = ms.size();
   return n % 2 ? ms[n / 2] : 0.5 * (ms[n / 2 - 1] + ms[n / 2]);
+}
+
+std::vector<Vec3f> HeadlessPreview::dstream_positions(const PreviewOptions& o) {
+  impl_->bind_target(o);
+  std::vector<Vec3f> out = impl_->renderer->dstream_positions(o);
+  if (glGetError() != GL_NO_ERROR) throw InternalError("OpenGL reported an error while capturing the dstream vertices");
+  return out;
 }
 
 Image render_headless(const Mesh& base, const PreviewMaps& maps, const PreviewOptions& o) {

@@ -6,6 +6,7 @@
 #include "meso/streams/cone_map.hpp"
 #include "meso/streams/distance_field.hpp"
 #include "meso/streams/pyramid.hpp"
+#include "meso/streams/vdm.hpp"
 #include "renderer.hpp"
 #include "test_support.hpp"
 
@@ -53,6 +54,21 @@ void add_cone_maps(PreviewMaps& maps, Border border) {
   relaxed.kind = ConeKind::relaxed;
   maps.relaxed_cone = build_cone_map(field, relaxed);
   maps.pyramid = pyramid_image(field);
+}
+
+// vdm.exr's two parts for the displacement (as meso streams vdm makes them).
+void add_vdm(PreviewMaps& maps, Border border, const VdmOptions& options, double max_rms = 1e-5) {
+  const HeightField field = make_height_field(maps.displacement, border);
+  const std::vector<Image> parts = vdm_images(compress_vdm(build_vdm(field, options), max_rms, 64), field, options);
+  maps.vdm_weights = parts[0];
+  maps.vdm_basis = parts[1];
+}
+
+// dstream.bin's levels for `base` sampled against `high` (as meso streams dstream makes them).
+void add_dstream(PreviewMaps& maps, const Mesh& base, const Mesh& high, int levels) {
+  DisplacementStreamOptions o;
+  o.levels = levels;
+  maps.dstream = encode_displacement_stream(sample_displacement_stream(base, high, o));
 }
 
 // 65 x 65 pixels: the centre pixel's ray goes exactly through the look-at point, the centre
@@ -140,6 +156,12 @@ TEST(Preview, EveryMethodIsStableStraightOnAndGrazing) {
   const HeightField field = make_height_field(maps.displacement, Border::clamp);
   maps.sdf = distance_field_image(build_distance_field(field, DistanceFieldOptions{}), field);
   add_cone_maps(maps, Border::clamp);
+  VdmOptions vdm;
+  vdm.theta = 4;
+  vdm.phi = 8;
+  vdm.curvatures = {0.0f, 1.0f};
+  add_vdm(maps, Border::clamp, vdm, 1e-3);
+  add_dstream(maps, cylinder, cylinder, 3);
   for (const auto& method : preview_methods()) {
     for (float angle : {0.0f, 89.9f}) {
       PreviewOptions o;
@@ -166,8 +188,25 @@ TEST(Preview, EveryMethodIsStableStraightOnAndGrazing) {
 TEST(Preview, MethodsNeedTheirStreams) {
   const Mesh quad = test::make_grid(1, 1);
   PreviewMaps maps = maps_with_height([](float u) { return 0.1f * u; });
-  for (const char* method : {"sphere-tracing", "cone", "relaxed-cone", "pyramid"}) {
+  for (const char* method : {"sphere-tracing", "cone", "relaxed-cone", "pyramid", "vdm", "dstream"}) {
     EXPECT_THROW(render_headless(quad, maps, centre_uv_options(method, 30.0f)), UsageError) << method;
+    EXPECT_FALSE(has_stream(maps, method)) << method;
+  }
+  EXPECT_TRUE(has_stream(maps, "pom"));
+  EXPECT_EQ(required_stream("vdm"), "vdm.exr");
+  EXPECT_EQ(required_stream("dstream"), "dstream.bin");
+  {
+    // A VDM of another height map, or with its parts swapped, is refused.
+    PreviewMaps other = maps;
+    VdmOptions vdm;
+    vdm.theta = 2;
+    vdm.phi = 4;
+    add_vdm(other, Border::clamp, vdm);
+    EXPECT_NO_THROW(check_vdm_matches(other.vdm_weights, other.vdm_basis, maps.displacement, "vdm.exr"));
+    EXPECT_THROW(check_vdm_matches(other.vdm_basis, other.vdm_weights, maps.displacement, "vdm.exr"), InputError);
+    Image doubled = maps.displacement;
+    for (float& v : doubled.pixels) v *= 2.0f;
+    EXPECT_THROW(check_vdm_matches(other.vdm_weights, other.vdm_basis, doubled, "vdm.exr"), InputError);
   }
   EXPECT_EQ(required_stream("pyramid"), "pyramid.exr");
   // A pyramid of another height map is refused; this map's renders.
@@ -780,6 +819,144 @@ TEST(Measure, TessellationIsCrackFree) {
     EXPECT_GT(covered, img.texel_count() / 3) << method;
     EXPECT_EQ(holes, 0u) << method;
   }
+}
+
+// ---- vdm and dstream (issue 8) ----
+
+// On a flat base the view-dependent displacement map finds the reference's visible points:
+// the table holds exact ray casts, so what remains is the interpolation between its samples.
+// The visible UV moves with the view as parallax does (not a texture on the base).
+TEST(Measure, VdmAgreesWithTheReferenceOnAFlatBase) {
+  const Mesh quad = test::make_grid(1, 1);
+  PreviewMaps maps = cone_maps(ConeScene::rough, Border::wrap);
+  VdmOptions vdm;
+  vdm.theta = 16;
+  vdm.phi = 32;
+  const auto [lo, hi] = std::minmax_element(maps.displacement.pixels.begin(), maps.displacement.pixels.end());
+  vdm.relief = *hi - *lo;  // object units = units of u on the unit quad
+  add_vdm(maps, Border::wrap, vdm, 1e-4);
+  CompareOptions o;
+  o.methods = {"vdm", "pom", "bump"};
+  o.view.width = o.view.height = 96;
+  o.view.camera.view_angle = 40.0f;
+  o.view.camera.azimuth = 35.0f;
+  o.view.camera.zoom = 3.0f;
+  o.view.iterations = 64;
+  o.repetitions = 1;
+  const Comparison c = compare_methods(quad, maps, o);
+  for (const MethodComparison& m : c.methods)
+    std::printf("vdm test: %-5s wrong hits %.4f, rmse %.4f, fetches %.1f\n", m.name.c_str(), m.wrong_hit_fraction, m.rmse, m.mean_iterations);
+  EXPECT_LE(c.methods[0].wrong_hit_fraction, 0.08);
+  EXPECT_GT(c.methods[2].wrong_hit_fraction, 3 * c.methods[0].wrong_hit_fraction + 0.02) << "bump mapping ignores parallax";
+  // Fetches: rank/4 weight lookups and up to 8 directions of (rank + 1) basis terms.
+  const int rank = std::get<int>(maps.vdm_weights.metadata.at("rank"));
+  // The table is compressed to rank 64 (the previewer's limit): on these rough bumps that
+  // leaves an RMS error of about a texel, most of the wrong hits.
+  std::printf("vdm test: rank %d, table RMS error %g u\n", rank, static_cast<double>(std::get<float>(maps.vdm_weights.metadata.at("rms_error"))));
+  EXPECT_GT(rank, 0);
+  EXPECT_LE(c.methods[0].max_iterations, 8.0 * (rank + 1) + (rank + 3) / 4 + 0.5);
+}
+
+// On a curved base the table's curvature slices bend the rays: seen at a grazing angle, a
+// cylinder rendered with vdm loses the pixels whose rays leave the bent height field (its
+// silhouette moves inward), which no flat-base method draws.
+TEST(Preview, VdmCurvatureMakesSilhouettes) {
+  const double radius = 0.5;
+  const Mesh cylinder = test::make_parametric(24, 20, [radius](double s, double t) {
+    const double a = 2.4 * (s - 0.5);
+    return Vec3f(float(radius * std::sin(a)), float(t), float(radius * (std::cos(a) - 1.0)));
+  }, false, false);
+  // Sparse ridges: between them a grazing ray meets nothing before the bent surface falls away.
+  PreviewMaps maps = maps_with_height([](float u) { return 0.03f * std::pow(std::max(0.0f, std::sin(12.0f * u)), 16.0f); });
+  const double per_u = object_length_per_uv(cylinder);
+  VdmOptions flat, curved;
+  flat.theta = curved.theta = 16;
+  flat.phi = curved.phi = 16;
+  flat.relief = curved.relief = static_cast<float>(0.03 / per_u);
+  curved.curvatures = {0.0f, static_cast<float>(per_u / radius)};
+  PreviewMaps flat_maps = maps, curved_maps = maps;
+  add_vdm(flat_maps, Border::clamp, flat, 1e-4);
+  add_vdm(curved_maps, Border::clamp, curved, 1e-4);
+  PreviewOptions o = view_options("vdm", 75.0f, 0.0f, 32, PreviewShade::uv);
+  auto covered = [&](const PreviewMaps& m) {
+    const Image img = render_headless(cylinder, m, o);
+    size_t n = 0;
+    for (size_t i = 0; i < img.texel_count(); ++i) n += img.pixels[4 * i + 3] > 0.5f;
+    return n;
+  };
+  const size_t with_flat = covered(flat_maps), with_curvature = covered(curved_maps);
+  std::printf("vdm silhouettes: %zu pixels with a flat table, %zu with curvature\n", with_flat, with_curvature);
+  EXPECT_LT(with_curvature, with_flat);
+  EXPECT_GT(with_curvature, with_flat / 2);
+}
+
+// The dstream vertex shader decodes what the CPU decodes, within the quantisation bound (plus
+// float rounding); morph 0 puts every vertex the coarser level has where that level puts it;
+// and the surface it draws is the reference's when stream and map hold the same displacement.
+TEST(Measure, DstreamDecodesAsTheCpuAndMorphsToTheCoarserLevel) {
+  const Mesh base = test::make_parametric(6, 4, [](double s, double t) {
+    const double a = 1.4 * (s - 0.5);
+    return Vec3f(float(std::sin(a)), float(t), float(std::cos(a) - 1.0));
+  }, false, false);
+  const Mesh high = test::make_parametric(60, 40, [](double s, double t) {
+    const double a = 1.6 * (s - 0.5), r = 1.04 + 0.02 * std::sin(9 * s) * std::cos(7 * t);
+    return Vec3f(float(r * std::sin(a)), float(1.2 * t - 0.1), float(r * std::cos(a) - 1.0));
+  }, false, false);
+  PreviewMaps maps = maps_with_height([](float) { return 0.0f; });
+  add_dstream(maps, base, high, 4);
+  HeadlessPreview gpu(base, maps);
+  const double bound = (maps.dstream.max_value - maps.dstream.min_value) / (2.0 * kDisplacementSteps);
+  PreviewOptions o = view_options("dstream", 30.0f, 0.0f, 8, PreviewShade::uv);
+  for (int level = 0; level < 4; ++level) {
+    o.iterations = 1 << level;
+    const std::vector<Vec3f> g = gpu.dstream_positions(o), c = decode_displacement_level(base, maps.dstream, level);
+    ASSERT_EQ(g.size(), c.size());
+    double worst = 0;
+    for (size_t k = 0; k < g.size(); ++k) worst = std::max(worst, static_cast<double>((g[k] - c[k]).norm()));
+    EXPECT_LE(worst, 1e-5) << "level " << level << " (quantisation step " << 2 * bound << ")";
+  }
+  o.iterations = 8;
+  o.morph = 0.0f;
+  const std::vector<Vec3f> morphed = gpu.dstream_positions(o);
+  o.iterations = 4;
+  o.morph = 1.0f;
+  const std::vector<Vec3f> coarse = gpu.dstream_positions(o);
+  const int n = 8, c = 4, per = (n + 1) * (n + 2) / 2, cper = (c + 1) * (c + 2) / 2;
+  size_t shared = 0;
+  for (int t = 0; t < static_cast<int>(base.n_faces()); ++t)
+    for (int i = 0, k = 0; i <= n; ++i)
+      for (int j = 0; j <= n - i; ++j, ++k)
+        if (i % 2 == 0 && j % 2 == 0) {
+          const int ci = i / 2, cj = j / 2;
+          const Vec3f a = morphed[static_cast<size_t>(t * per + k)], b = coarse[static_cast<size_t>(t * cper + ci * (c + 1) - ci * (ci - 1) / 2 + cj)];
+          EXPECT_LE((a - b).norm(), 1e-6f) << t << " " << i << "," << j;
+          ++shared;
+        }
+  EXPECT_EQ(shared, base.n_faces() * static_cast<size_t>(cper));
+
+  // Against the reference: a stream and a map of the same constant displacement.
+  const Mesh quad = test::make_grid(2, 2);
+  const Mesh lifted = test::make_parametric(4, 4, [](double s, double t) { return Vec3f(float(4 * s - 1.5), float(4 * t - 1.5), 0.05f); }, false, false);
+  PreviewMaps same = maps_with_height([](float) { return 0.05f; });
+  add_dstream(same, quad, lifted, 3);
+  CompareOptions co;
+  co.methods = {"dstream"};
+  co.view.width = co.view.height = 64;
+  co.view.camera.view_angle = 50.0f;
+  co.view.iterations = 4;
+  co.repetitions = 1;
+  const Comparison cmp = compare_methods(quad, same, co);
+  EXPECT_LE(cmp.methods[0].wrong_hit_fraction, 0.01);
+  EXPECT_GT(cmp.methods[0].mean_iterations, 0.0) << "stream reads are counted";
+  // Morphing by distance: near the eye the level's own values, far away the coarser level's.
+  o.iterations = 8;
+  PreviewOptions full = o;
+  full.morph = 1.0f;
+  o.morph = -1.0f;
+  o.lod_distance = 1e6f;
+  EXPECT_EQ(gpu.dstream_positions(o), gpu.dstream_positions(full));
+  o.lod_distance = 1e-6f;
+  EXPECT_EQ(gpu.dstream_positions(o), morphed);
 }
 
 // Two previews at once (compare_methods makes its own while the caller holds one): each

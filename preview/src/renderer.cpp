@@ -2,13 +2,18 @@
 
 #include "meso/bake/tangent_frame.hpp"
 #include "meso/core/error.hpp"
+#include "meso/bake/curvature.hpp"
 #include "meso/core/mesh_arrays.hpp"
+#include "meso/formats/image_io.hpp"
 #include "meso/streams/pyramid.hpp"
 #include "sampling.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <cstring>
 #include <initializer_list>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -22,6 +27,8 @@ extern const char* const cone_stepping_glsl;
 extern const char* const pyramid_glsl;
 extern const char* const sphere_tracing_glsl;
 extern const char* const dig_glsl;
+extern const char* const vdm_glsl;
+extern const char* const dstream_vert;
 extern const char* const tess_vert;
 extern const char* const tess_tesc;
 extern const char* const tess_tese;
@@ -32,7 +39,8 @@ const std::vector<std::string>& preview_methods() {
   // The order is the shader's method numbering (surface.frag).
   static const std::vector<std::string> names{"mesh",         "tessellation", "bump",  "parallax", "offset-limited",
                                               "slope",        "iterative-parallax", "steep", "relief", "pom",
-                                              "cone",         "relaxed-cone", "pyramid", "sphere-tracing", "dig"};
+                                              "cone",         "relaxed-cone", "pyramid", "sphere-tracing", "dig",
+                                              "vdm",          "dstream"};
   return names;
 }
 
@@ -69,7 +77,7 @@ std::string string_attribute(const Image& img, const char* key) {
 }  // namespace
 
 bool maps_tile(const PreviewMaps& maps) {
-  for (const Image* stream : {&maps.sdf, &maps.cone, &maps.relaxed_cone, &maps.pyramid})
+  for (const Image* stream : {&maps.sdf, &maps.cone, &maps.relaxed_cone, &maps.pyramid, &maps.vdm_weights})
     if (!stream->empty() && string_attribute(*stream, "border") == "wrap") return true;
   return false;
 }
@@ -110,24 +118,97 @@ void check_stream_matches(const std::string& method, const Image& stream, const 
   if (method == "pyramid") check_pyramid_matches(stream, displacement, name);
 }
 
+std::vector<float> vdm_curvatures(const Image& weights, const std::string& name) {
+  std::vector<float> out;
+  std::stringstream list(string_attribute(weights, "curvatures"));
+  std::string item;
+  while (std::getline(list, item, ',')) {
+    char* end = nullptr;
+    const float c = std::strtof(item.c_str(), &end);
+    if (end == item.c_str() || !std::isfinite(c)) throw InputError(name, "has a meso:curvatures list that is not numbers");
+    out.push_back(c);
+  }
+  if (out.empty()) throw InputError(name, "lacks the meso:curvatures attribute of meso streams vdm");
+  if (!std::is_sorted(out.begin(), out.end())) throw InputError(name, "its curvatures are not in increasing order");
+  return out;
+}
+
+void check_vdm_matches(const Image& weights, const Image& basis, const Image& displacement, const std::string& name) {
+  const char* producer = "meso streams vdm";
+  if (weights.width != displacement.width || weights.height != displacement.height)
+    throw InputError(name, "its size does not match displacement.exr (made from another height map?)");
+  const int theta = static_cast<int>(stream_number(weights, "theta", name, producer));
+  const int phi = static_cast<int>(stream_number(weights, "phi", name, producer));
+  const int rank = static_cast<int>(stream_number(weights, "rank", name, producer));
+  const float theta_max = stream_number(weights, "theta_max", name, producer), relief = stream_number(weights, "relief", name, producer);
+  const size_t curvatures = vdm_curvatures(weights, name).size();
+  if (theta < 1 || phi < 1 || !(theta_max > 0 && theta_max <= 90) || !(relief > 0))
+    throw InputError(name, "has an invalid direction sampling or relief in its metadata");
+  if (rank > kMaxVdmRank || curvatures > kMaxVdmCurvatures)
+    throw InputError(name, "has rank " + std::to_string(rank) + " and " + std::to_string(curvatures) + " curvatures; the previewer takes at most " +
+                               std::to_string(kMaxVdmRank) + " and " + std::to_string(kMaxVdmCurvatures) + " (meso streams vdm --max-rank)");
+  if (weights.channels != std::max(rank, 1) || basis.width != rank + 1 ||
+      static_cast<size_t>(basis.height) != static_cast<size_t>(theta) * static_cast<size_t>(phi) * curvatures)
+    throw InputError(name, "its parts' sizes do not match its rank and direction sampling");
+  check_height_range(weights, displacement, name, producer);
+}
+
 std::string required_stream(const std::string& method) {
   if (method == "sphere-tracing") return "sdf.exr";
   if (method == "cone") return "cone.exr";
   if (method == "relaxed-cone") return "relaxed-cone.exr";
   if (method == "pyramid") return "pyramid.exr";
+  if (method == "vdm") return "vdm.exr";
+  if (method == "dstream") return "dstream.bin";
   return "";
 }
 
-const Image* stream_for(const PreviewMaps& maps, const std::string& method) {
+namespace {
+// The image member holding a method's stream (nullptr for vdm, dstream and methods without one).
+Image* image_stream(PreviewMaps& maps, const std::string& method) {
   if (method == "sphere-tracing") return &maps.sdf;
   if (method == "cone") return &maps.cone;
   if (method == "relaxed-cone") return &maps.relaxed_cone;
   if (method == "pyramid") return &maps.pyramid;
   return nullptr;
 }
+}  // namespace
 
-Image* stream_for(PreviewMaps& maps, const std::string& method) {
-  return const_cast<Image*>(stream_for(static_cast<const PreviewMaps&>(maps), method));
+bool has_stream(const PreviewMaps& maps, const std::string& method) {
+  if (method == "vdm") return !maps.vdm_weights.empty();
+  if (method == "dstream") return !maps.dstream.vertices.empty();
+  const Image* image = image_stream(const_cast<PreviewMaps&>(maps), method);
+  return !image || !image->empty();
+}
+
+void clear_stream(PreviewMaps& maps, const std::string& method) {
+  if (method == "vdm") maps.vdm_weights = maps.vdm_basis = Image();
+  if (method == "dstream") maps.dstream = EncodedStream();
+  if (Image* image = image_stream(maps, method)) *image = Image();
+}
+
+void load_stream(PreviewMaps& maps, const Mesh& base, const std::string& method, const std::filesystem::path& file) {
+  if (required_stream(method).empty()) return;
+  const std::string name = file.string();
+  if (!std::filesystem::exists(file)) throw InputError(name, "missing: method " + method + " needs it (meso streams)");
+  if (method == "vdm") {
+    std::vector<Image> parts = read_image_parts(file);
+    if (parts.size() != 2) throw InputError(name, "needs two parts (weights, basis): is it meso streams vdm's output?");
+    check_vdm_matches(parts[0], parts[1], maps.displacement, name);
+    maps.vdm_weights = std::move(parts[0]);
+    maps.vdm_basis = std::move(parts[1]);
+  } else if (method == "dstream") {
+    int vertices = 0, triangles = 0;
+    EncodedStream stream = read_displacement_stream(name, &vertices, &triangles);
+    if (static_cast<size_t>(vertices) != base.n_vertices() || static_cast<size_t>(triangles) != base.n_faces())
+      throw InputError(name, "was made for a base mesh of " + std::to_string(vertices) + " vertices and " + std::to_string(triangles) +
+                                 " triangles; this one has " + std::to_string(base.n_vertices()) + " and " + std::to_string(base.n_faces()));
+    maps.dstream = std::move(stream);
+  } else {
+    Image image = read_image(file);
+    check_stream_matches(method, image, maps.displacement, name);
+    *image_stream(maps, method) = std::move(image);
+  }
 }
 
 int method_index(const std::string& name) {
@@ -155,10 +236,12 @@ GLuint compile(GLenum type, std::initializer_list<const char*> pieces) {
   return s;
 }
 
-// Links the compiled stages into a program (and deletes the stages).
-GLuint link(std::initializer_list<GLuint> stages) {
+// Links the compiled stages into a program (and deletes the stages); `feedback`: a vertex
+// output to capture with transform feedback.
+GLuint link(std::initializer_list<GLuint> stages, const char* feedback = nullptr) {
   const GLuint program = glCreateProgram();
   for (GLuint s : stages) glAttachShader(program, s);
+  if (feedback) glTransformFeedbackVaryings(program, 1, &feedback, GL_INTERLEAVED_ATTRIBS);
   glLinkProgram(program);
   for (GLuint s : stages) glDeleteShader(s);
   GLint ok = 0;
@@ -169,6 +252,15 @@ GLuint link(std::initializer_list<GLuint> stages) {
     throw InternalError(std::string("preview shaders do not link: ") + log);
   }
   return program;
+}
+
+// Every sampler of the fragment stage on its own texture unit, fixed for the program's life:
+// two sampler types on one unit (all default to unit 0) make every draw invalid, even with
+// rasterisation off. draw() binds the textures to these units.
+void assign_texture_units(GLuint program) {
+  glUseProgram(program);
+  const char* const names[] = {"u_height", "u_normal", "u_sdf", "u_cone", "u_pyramid", "u_dig", "u_vdm_weights", "u_vdm_basis"};
+  for (GLint unit = 0; unit < 8; ++unit) glUniform1i(glGetUniformLocation(program, names[unit]), unit);
 }
 
 GLuint upload_texture(const Image& img, int channels) {
@@ -205,7 +297,10 @@ SurfaceRenderer::SurfaceRenderer(const Mesh& base, const PreviewMaps& maps) : ba
   const auto frames = compute_tangent_frames(m);
   store_tangents(m, frames);
   const CornerSplit split = split_corners(m);
-  constexpr size_t kStride = 3 + 3 + 2 + 4 + 2;
+  // The principal curvatures (vdm's curvature along the view), fitted only when it is loaded.
+  std::vector<VertexCurvature> curvature;
+  if (!maps.vdm_weights.empty()) curvature = fit_curvature(m);
+  constexpr size_t kStride = 3 + 3 + 2 + 4 + 2 + 3 + 2;
   std::vector<float> verts(split.corner.size() * kStride);
   for (size_t i = 0; i < split.corner.size(); ++i) {
     const auto h = split.corner[i];
@@ -213,9 +308,12 @@ SurfaceRenderer::SurfaceRenderer(const Mesh& base, const PreviewMaps& maps) : ba
     const auto& fr = frames[static_cast<size_t>(h.idx())];
     const Vec3f p = m.point(v), nv = m.normal(v);
     const Vec2f uv = m.texcoord2D(h);
+    const VertexCurvature k = curvature.empty() ? VertexCurvature{0, 0, Vec3f(0, 0, 0), Vec3f(0, 0, 0), 0}
+                                                : curvature[static_cast<size_t>(v.idx())];
     float* o = &verts[i * kStride];
     const float values[kStride] = {p[0], p[1], p[2], nv[0], nv[1], nv[2], uv[0], uv[1],
-                                   fr.tangent[0], fr.tangent[1], fr.tangent[2], fr.sign, fr.du_length, fr.dv_length};
+                                   fr.tangent[0], fr.tangent[1], fr.tangent[2], fr.sign, fr.du_length, fr.dv_length,
+                                   k.d1[0], k.d1[1], k.d1[2], k.k1, k.k2};
     std::copy(values, values + kStride, o);
   }
   index_count_ = static_cast<GLsizei>(split.triangles.size());
@@ -224,11 +322,14 @@ SurfaceRenderer::SurfaceRenderer(const Mesh& base, const PreviewMaps& maps) : ba
   // tessellation): the tessellation stages + the same fragment pieces.
   auto fragment = [] {
     return compile(GL_FRAGMENT_SHADER, {shaders::surface_common_glsl, shaders::footprint_glsl, shaders::cone_stepping_glsl,
-                                        shaders::pyramid_glsl, shaders::sphere_tracing_glsl, shaders::dig_glsl, shaders::surface_frag});
+                                        shaders::pyramid_glsl, shaders::sphere_tracing_glsl, shaders::dig_glsl, shaders::vdm_glsl,
+                                        shaders::surface_frag});
   };
   program_ = link({compile(GL_VERTEX_SHADER, {shaders::surface_vert}), fragment()});
   tess_program_ = link({compile(GL_VERTEX_SHADER, {shaders::tess_vert}), compile(GL_TESS_CONTROL_SHADER, {shaders::tess_tesc}),
                         compile(GL_TESS_EVALUATION_SHADER, {shaders::tess_tese}), fragment()});
+  assign_texture_units(program_);
+  assign_texture_units(tess_program_);
   glGenBuffers(1, &vertex_work_);
   glBindBuffer(GL_SHADER_STORAGE_BUFFER, vertex_work_);
   const GLuint zero = 0;
@@ -239,9 +340,9 @@ SurfaceRenderer::SurfaceRenderer(const Mesh& base, const PreviewMaps& maps) : ba
   glGenBuffers(1, &vbo_);
   glBindBuffer(GL_ARRAY_BUFFER, vbo_);
   glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(verts.size() * sizeof(float)), verts.data(), GL_STATIC_DRAW);
-  const GLint sizes[5] = {3, 3, 2, 4, 2};
+  const GLint sizes[7] = {3, 3, 2, 4, 2, 3, 2};
   size_t offset = 0;
-  for (GLuint a = 0; a < 5; ++a) {
+  for (GLuint a = 0; a < 7; ++a) {
     glEnableVertexAttribArray(a);
     glVertexAttribPointer(a, sizes[a], GL_FLOAT, GL_FALSE, static_cast<GLsizei>(kStride * sizeof(float)),
                           reinterpret_cast<const void*>(offset * sizeof(float)));
@@ -259,6 +360,12 @@ SurfaceRenderer::SurfaceRenderer(const Mesh& base, const PreviewMaps& maps) : ba
   if (!maps.cone.empty()) upload_cone(0, maps.cone, maps.displacement);
   if (!maps.relaxed_cone.empty()) upload_cone(1, maps.relaxed_cone, maps.displacement);
   if (!maps.pyramid.empty()) upload_pyramid(maps.pyramid, maps.displacement);
+  if (!maps.vdm_weights.empty()) upload_vdm(maps);
+  if (!maps.dstream.vertices.empty()) {
+    dstream_program_ = link({compile(GL_VERTEX_SHADER, {shaders::dstream_vert}), fragment()}, "v_position");
+    assign_texture_units(dstream_program_);
+    upload_dstream(base, maps.dstream, frames);
+  }
   const auto& px = maps.displacement.pixels;
   if (!px.empty()) {
     const auto [lo, hi] = std::minmax_element(px.begin(), px.end());
@@ -355,6 +462,163 @@ void SurfaceRenderer::upload_pyramid(const Image& level0, const Image& displacem
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
 }
 
+void SurfaceRenderer::upload_vdm(const PreviewMaps& maps) {
+  const Image& weights = maps.vdm_weights;
+  const Image& basis = maps.vdm_basis;
+  check_vdm_matches(weights, basis, maps.displacement, "vdm.exr");
+  auto number = [&](const char* key) { return stream_number(weights, key, "vdm.exr", "meso streams vdm"); };
+  vdm_rank_ = static_cast<int>(number("rank"));
+  vdm_theta_ = static_cast<int>(number("theta"));
+  vdm_phi_ = static_cast<int>(number("phi"));
+  vdm_theta_max_ = number("theta_max") * 3.14159265f / 180.0f;
+  vdm_relief_ = number("relief");
+  vdm_scale_ = number("height_scale");
+  vdm_bias_ = number("height_bias");
+  vdm_aspect_ = static_cast<float>(weights.height) / static_cast<float>(weights.width);
+  vdm_curvatures_ = vdm_curvatures(weights, "vdm.exr");
+  vdm_wrap_ = string_attribute(weights, "border") == "wrap";
+  // Weights: 4 components per layer, rows flipped as every 2D map (GL row 0 = v near 0).
+  const int layers = std::max(1, (vdm_rank_ + 3) / 4), w = weights.width, h = weights.height;
+  std::vector<float> texels(static_cast<size_t>(layers) * static_cast<size_t>(w) * static_cast<size_t>(h) * 4, 0.0f);
+  for (int l = 0; l < layers; ++l)
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        for (int c = 0; c < 4; ++c) {
+          const int k = 4 * l + c;
+          if (k >= vdm_rank_) continue;
+          texels[((static_cast<size_t>(l) * static_cast<size_t>(h) + static_cast<size_t>(h - 1 - y)) * static_cast<size_t>(w) + static_cast<size_t>(x)) * 4 +
+                 static_cast<size_t>(c)] = weights.at(x, y, k);
+        }
+  glGenTextures(1, &vdm_weights_tex_);
+  glBindTexture(GL_TEXTURE_2D_ARRAY, vdm_weights_tex_);
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_RGBA32F, w, h, layers, 0, GL_RGBA, GL_FLOAT, texels.data());
+  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  const GLint wrap_mode = vdm_wrap_ ? GL_REPEAT : GL_CLAMP_TO_EDGE;
+  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, wrap_mode);
+  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, wrap_mode);
+  // Mean and basis: row = direction, as stored (read with texelFetch by direction index).
+  std::vector<float> table(basis.pixels.size());
+  for (int y = 0; y < basis.height; ++y)
+    for (int x = 0; x < basis.width; ++x) table[static_cast<size_t>(y) * static_cast<size_t>(basis.width) + static_cast<size_t>(x)] = basis.at(x, y);
+  glGenTextures(1, &vdm_basis_tex_);
+  glBindTexture(GL_TEXTURE_2D, vdm_basis_tex_);
+  glTexImage2D(GL_TEXTURE_2D, 0, GL_R32F, basis.width, basis.height, 0, GL_RED, GL_FLOAT, table.data());
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+}
+
+void SurfaceRenderer::upload_dstream(const Mesh& base, const EncodedStream& stream, const std::vector<TangentFrame>& frames) {
+  // The base triangles' corners in face_halfedges() order, as displacement_stream_point().
+  std::vector<float> corners(base.n_faces() * 3 * 16, 0.0f);
+  for (auto f : base.faces()) {
+    int k = 0;
+    for (auto h : face_halfedges(base, f)) {
+      const auto v = base.to_vertex_handle(h);
+      const auto& fr = frames[static_cast<size_t>(h.idx())];
+      const Vec3f p = base.point(v), n = base.normal(v);
+      const Vec2f uv = base.has_halfedge_texcoords2D() ? base.texcoord2D(h) : Vec2f(0, 0);
+      const int32_t index = v.idx();
+      float index_bits;
+      std::memcpy(&index_bits, &index, sizeof index_bits);
+      const float values[16] = {p[0], p[1], p[2], index_bits, n[0], n[1], n[2], 0.0f, uv[0], uv[1], fr.du_length, fr.dv_length,
+                                fr.tangent[0], fr.tangent[1], fr.tangent[2], fr.sign};
+      std::copy(values, values + 16, &corners[(static_cast<size_t>(f.idx()) * 3 + static_cast<size_t>(k++)) * 16]);
+    }
+  }
+  glGenBuffers(1, &dstream_corners_);
+  glBindBuffer(GL_SHADER_STORAGE_BUFFER, dstream_corners_);
+  glBufferData(GL_SHADER_STORAGE_BUFFER, static_cast<GLsizeiptr>(corners.size() * sizeof(float)), corners.data(), GL_STATIC_DRAW);
+  dstream_min_ = stream.min_value;
+  dstream_max_ = stream.max_value;
+  const int triangles = static_cast<int>(base.n_faces());
+  for (size_t l = 0; l < stream.vertices.size(); ++l) {
+    const std::vector<uint64_t>& level = stream.vertices[l];
+    std::vector<uint32_t> words(2 * level.size());
+    for (size_t k = 0; k < level.size(); ++k) {
+      words[2 * k] = static_cast<uint32_t>(level[k]);
+      words[2 * k + 1] = static_cast<uint32_t>(level[k] >> 32);
+    }
+    GLuint buffer = 0;
+    glGenBuffers(1, &buffer);
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, buffer);
+    glBufferData(GL_SHADER_STORAGE_BUFFER, static_cast<GLsizeiptr>(words.size() * sizeof(uint32_t)), words.data(), GL_STATIC_DRAW);
+    // Small triangles of the regular tessellation, oriented as the base triangle: per cell
+    // (i, j) the upright (i, j), (i+1, j), (i, j+1) and, inside, (i+1, j), (i+1, j+1), (i, j+1).
+    const int n = stream.segments[l], per = (n + 1) * (n + 2) / 2;
+    auto at = [n](int i, int j) { return static_cast<uint32_t>(i * (n + 1) - i * (i - 1) / 2 + j); };
+    std::vector<uint32_t> indices;
+    indices.reserve(static_cast<size_t>(triangles) * static_cast<size_t>(n) * static_cast<size_t>(n) * 3);
+    for (int t = 0; t < triangles; ++t) {
+      const uint32_t o = static_cast<uint32_t>(t) * static_cast<uint32_t>(per);
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n - i; ++j) {
+          for (uint32_t q : {at(i, j), at(i + 1, j), at(i, j + 1)}) indices.push_back(o + q);
+          if (i + j < n - 1)
+            for (uint32_t q : {at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)}) indices.push_back(o + q);
+        }
+    }
+    GLuint ibo = 0;
+    glGenBuffers(1, &ibo);
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ibo);
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(indices.size() * sizeof(uint32_t)), indices.data(), GL_STATIC_DRAW);
+    dstream_vertices_.push_back(buffer);
+    dstream_indices_.push_back(ibo);
+    dstream_vertex_count_.push_back(static_cast<GLsizei>(level.size()));
+    dstream_index_count_.push_back(static_cast<GLsizei>(indices.size()));
+    dstream_segments_.push_back(n);
+  }
+  glGenVertexArrays(1, &dstream_vao_);
+  glGenBuffers(1, &dstream_capture_);
+}
+
+int SurfaceRenderer::bind_dstream(const PreviewOptions& o, const CameraPose& pose) {
+  if (dstream_segments_.empty()) return -1;
+  int level = 0;
+  while (level + 1 < static_cast<int>(dstream_segments_.size()) && dstream_segments_[static_cast<size_t>(level + 1)] <= std::max(o.iterations, 1))
+    ++level;
+  const GLuint prog = dstream_program_;
+  glUseProgram(prog);
+  glUniformMatrix4fv(glGetUniformLocation(prog, "u_view_projection"), 1, GL_FALSE, pose.view_projection.data());
+  glUniform3f(glGetUniformLocation(prog, "u_eye"), pose.eye[0], pose.eye[1], pose.eye[2]);
+  glUniform1i(glGetUniformLocation(prog, "u_segments"), dstream_segments_[static_cast<size_t>(level)]);
+  glUniform1f(glGetUniformLocation(prog, "u_dstream_min"), dstream_min_);
+  glUniform1f(glGetUniformLocation(prog, "u_dstream_max"), dstream_max_);
+  glUniform1f(glGetUniformLocation(prog, "u_morph"), o.morph >= 0 ? std::min(o.morph, 1.0f) : -1.0f);
+  glUniform1f(glGetUniformLocation(prog, "u_lod_distance"), o.lod_distance);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, dstream_corners_);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, dstream_vertices_[static_cast<size_t>(level)]);
+  const GLuint zero = 0;
+  glBindBuffer(GL_SHADER_STORAGE_BUFFER, vertex_work_);
+  glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, sizeof zero, &zero);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, vertex_work_);
+  return level;
+}
+
+std::vector<Vec3f> SurfaceRenderer::dstream_positions(const PreviewOptions& o) {
+  const CameraPose pose = frame_camera(base_, o.camera, static_cast<float>(o.width) / static_cast<float>(o.height));
+  const int level = bind_dstream(o, pose);
+  if (level < 0) return {};
+  const GLsizei count = dstream_vertex_count_[static_cast<size_t>(level)];
+  glBindBuffer(GL_TRANSFORM_FEEDBACK_BUFFER, dstream_capture_);
+  glBufferData(GL_TRANSFORM_FEEDBACK_BUFFER, static_cast<GLsizeiptr>(count) * 3 * static_cast<GLsizeiptr>(sizeof(float)), nullptr, GL_STREAM_READ);
+  glBindBufferBase(GL_TRANSFORM_FEEDBACK_BUFFER, 0, dstream_capture_);
+  glEnable(GL_RASTERIZER_DISCARD);
+  glBindVertexArray(dstream_vao_);
+  glBeginTransformFeedback(GL_POINTS);
+  glDrawArrays(GL_POINTS, 0, count);
+  glEndTransformFeedback();
+  glBindVertexArray(0);
+  glDisable(GL_RASTERIZER_DISCARD);
+  std::vector<float> xyz(static_cast<size_t>(count) * 3);
+  glGetBufferSubData(GL_TRANSFORM_FEEDBACK_BUFFER, 0, static_cast<GLsizeiptr>(xyz.size() * sizeof(float)), xyz.data());
+  glBindBufferBase(GL_TRANSFORM_FEEDBACK_BUFFER, 0, 0);
+  std::vector<Vec3f> out(static_cast<size_t>(count));
+  for (size_t k = 0; k < out.size(); ++k) out[k] = Vec3f(xyz[3 * k], xyz[3 * k + 1], xyz[3 * k + 2]);
+  return out;
+}
+
 void SurfaceRenderer::ensure_dig_target(int width, int height) {
   if (dig_fbo_ && dig_width_ == width && dig_height_ == height) return;
   if (!dig_fbo_) {
@@ -364,6 +628,7 @@ void SurfaceRenderer::ensure_dig_target(int width, int height) {
   }
   dig_width_ = width;
   dig_height_ = height;
+  glActiveTexture(GL_TEXTURE5);  // u_dig's unit: binding it here disturbs no other map
   glBindTexture(GL_TEXTURE_2D, dig_tex_);
   glTexImage2D(GL_TEXTURE_2D, 0, GL_RG32F, width, height, 0, GL_RG, GL_FLOAT, nullptr);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
@@ -392,6 +657,14 @@ double SurfaceRenderer::vertex_stage_fetches() const {
 }
 
 SurfaceRenderer::~SurfaceRenderer() {
+  glDeleteTextures(1, &vdm_weights_tex_);
+  glDeleteTextures(1, &vdm_basis_tex_);
+  glDeleteProgram(dstream_program_);
+  glDeleteVertexArrays(1, &dstream_vao_);
+  glDeleteBuffers(1, &dstream_corners_);
+  glDeleteBuffers(1, &dstream_capture_);
+  if (!dstream_vertices_.empty()) glDeleteBuffers(static_cast<GLsizei>(dstream_vertices_.size()), dstream_vertices_.data());
+  if (!dstream_indices_.empty()) glDeleteBuffers(static_cast<GLsizei>(dstream_indices_.size()), dstream_indices_.data());
   glDeleteBuffers(1, &vertex_work_);
   glDeleteProgram(tess_program_);
   glDeleteFramebuffers(1, &dig_fbo_);
@@ -418,8 +691,11 @@ void SurfaceRenderer::draw(const PreviewOptions& o, int width, int height) {
   glDisable(GL_CULL_FACE);
   // The flat tangent sign comes from a triangle's first corner, the corner the baker uses.
   glProvokingVertex(GL_FIRST_VERTEX_CONVENTION);
-  const bool per_vertex = o.method == "mesh" || o.method == "tessellation";
-  const GLuint prog = per_vertex ? tess_program_ : program_;
+  const bool dstream = o.method == "dstream", vdm = o.method == "vdm";
+  const bool per_vertex = o.method == "mesh" || o.method == "tessellation" || dstream;
+  if ((dstream && !dstream_program_) || (vdm && !vdm_weights_tex_))
+    throw UsageError("method " + o.method + " needs the stream " + required_stream(o.method) + " (meso streams)");
+  const GLuint prog = dstream ? dstream_program_ : per_vertex ? tess_program_ : program_;
   glUseProgram(prog);
   glUniformMatrix4fv(glGetUniformLocation(prog, "u_view_projection"), 1, GL_FALSE, pose.view_projection.data());
   glUniform3f(glGetUniformLocation(prog, "u_eye"), pose.eye[0], pose.eye[1], pose.eye[2]);
@@ -443,9 +719,11 @@ void SurfaceRenderer::draw(const PreviewOptions& o, int width, int height) {
   // tile when any loaded stream does.
   const bool wrap = o.method == "sphere-tracing" ? sdf_wrap_
                     : pyramid                    ? pyramid_wrap_
+                    : vdm                        ? vdm_wrap_
                     : cone >= 0                  ? cone_wrap_[static_cast<size_t>(cone)]
                                                  : (sdf_tex_ && sdf_wrap_) || (cone_tex_[0] && cone_wrap_[0]) ||
-                                      (cone_tex_[1] && cone_wrap_[1]) || (pyramid_tex_ && pyramid_wrap_);
+                                      (cone_tex_[1] && cone_wrap_[1]) || (pyramid_tex_ && pyramid_wrap_) ||
+                                      (vdm_weights_tex_ && vdm_wrap_);
   const GLint wrap_mode = wrap ? GL_REPEAT : GL_CLAMP_TO_EDGE;
   for (GLuint tex : {height_tex_, normal_tex_}) {
     glBindTexture(GL_TEXTURE_2D, tex);
@@ -454,13 +732,10 @@ void SurfaceRenderer::draw(const PreviewOptions& o, int width, int height) {
   }
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, height_tex_);
-  glUniform1i(glGetUniformLocation(prog, "u_height"), 0);
   glActiveTexture(GL_TEXTURE1);
   glBindTexture(GL_TEXTURE_2D, normal_tex_);
-  glUniform1i(glGetUniformLocation(prog, "u_normal"), 1);
   glActiveTexture(GL_TEXTURE2);
   glBindTexture(GL_TEXTURE_3D, sdf_tex_);
-  glUniform1i(glGetUniformLocation(prog, "u_sdf"), 2);
   glUniform1f(glGetUniformLocation(prog, "u_sdf_scale"), sdf_scale_);
   glUniform1f(glGetUniformLocation(prog, "u_sdf_bias"), sdf_bias_);
   glUniform1f(glGetUniformLocation(prog, "u_sdf_relief"), sdf_relief_);
@@ -470,14 +745,29 @@ void SurfaceRenderer::draw(const PreviewOptions& o, int width, int height) {
   const size_t c = cone >= 0 ? static_cast<size_t>(cone) : 0;
   glActiveTexture(GL_TEXTURE3);
   glBindTexture(GL_TEXTURE_2D, cone_tex_[c]);
-  glUniform1i(glGetUniformLocation(prog, "u_cone"), 3);
   glActiveTexture(GL_TEXTURE4);
   glBindTexture(GL_TEXTURE_2D, pyramid_tex_);
-  glUniform1i(glGetUniformLocation(prog, "u_pyramid"), 4);
   glUniform1i(glGetUniformLocation(prog, "u_pyramid_levels"), pyramid_levels_);
   if (pyramid_levels_ > 0) {
     glUniform2iv(glGetUniformLocation(prog, "u_pyramid_offset"), pyramid_levels_, pyramid_offset_.data());
     glUniform2iv(glGetUniformLocation(prog, "u_pyramid_size"), pyramid_levels_, pyramid_size_.data());
+  }
+  // View-dependent displacement (vdm.glsl).
+  glActiveTexture(GL_TEXTURE6);
+  glBindTexture(GL_TEXTURE_2D_ARRAY, vdm_weights_tex_);
+  glActiveTexture(GL_TEXTURE7);
+  glBindTexture(GL_TEXTURE_2D, vdm_basis_tex_);
+  if (vdm_weights_tex_) {
+    glUniform1i(glGetUniformLocation(prog, "u_vdm_rank"), vdm_rank_);
+    glUniform1i(glGetUniformLocation(prog, "u_vdm_theta"), vdm_theta_);
+    glUniform1i(glGetUniformLocation(prog, "u_vdm_phi"), vdm_phi_);
+    glUniform1f(glGetUniformLocation(prog, "u_vdm_theta_max"), vdm_theta_max_);
+    glUniform1i(glGetUniformLocation(prog, "u_vdm_curvature_count"), static_cast<GLint>(vdm_curvatures_.size()));
+    glUniform1fv(glGetUniformLocation(prog, "u_vdm_curvatures"), static_cast<GLsizei>(vdm_curvatures_.size()), vdm_curvatures_.data());
+    glUniform1f(glGetUniformLocation(prog, "u_vdm_relief"), vdm_relief_);
+    glUniform1f(glGetUniformLocation(prog, "u_vdm_scale"), vdm_scale_);
+    glUniform1f(glGetUniformLocation(prog, "u_vdm_bias"), vdm_bias_);
+    glUniform1f(glGetUniformLocation(prog, "u_vdm_aspect"), vdm_aspect_);
   }
   // The method's stream: its normalisation and border.
   glUniform1f(glGetUniformLocation(prog, "u_stream_scale"), pyramid ? pyramid_scale_ : cone_scale_[c]);
@@ -508,10 +798,14 @@ void SurfaceRenderer::draw(const PreviewOptions& o, int width, int height) {
     glUniform4f(ndc, 1.0f, 0.0f, 1.0f, 0.0f);
     glActiveTexture(GL_TEXTURE5);
     glBindTexture(GL_TEXTURE_2D, dig_tex_);
-    glUniform1i(glGetUniformLocation(prog, "u_dig"), 5);
   }
   glUniform1i(glGetUniformLocation(prog, "u_dig_pass"), 2);
-  if (per_vertex) {
+  if (dstream) {
+    const int level = bind_dstream(o, pose);
+    glBindVertexArray(dstream_vao_);
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, dstream_indices_[static_cast<size_t>(level)]);
+    glDrawElements(GL_TRIANGLES, dstream_index_count_[static_cast<size_t>(level)], GL_UNSIGNED_INT, nullptr);
+  } else if (per_vertex) {
     glUniform1i(glGetUniformLocation(prog, "u_tess_mode"), o.method == "mesh" ? 0 : 1);
     glUniform2f(glGetUniformLocation(prog, "u_viewport"), static_cast<float>(width), static_cast<float>(height));
     const GLuint zero = 0;

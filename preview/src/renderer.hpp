@@ -3,6 +3,7 @@
 #pragma once
 
 #include "camera.hpp"
+#include "meso/bake/tangent_frame.hpp"
 #include "meso/preview/preview.hpp"
 
 #include <epoxy/gl.h>
@@ -23,8 +24,13 @@ class SurfaceRenderer {
   void draw(const PreviewOptions& options, int width, int height);
 
   // Height fetches the vertex stages made in the last draw (per-vertex methods: the
-  // tessellation levels' edge samples and one per generated vertex; 0 for the others).
+  // tessellation levels' edge samples and one per generated vertex; dstream: one stream read
+  // per vertex invocation; 0 for the others).
   double vertex_stage_fetches() const;
+
+  // The dstream method's vertex positions for `options` (its level and morph), captured by
+  // transform feedback, in the level's vertex order. Empty without a stream.
+  std::vector<Vec3f> dstream_positions(const PreviewOptions& options);
 
  private:
   void upload_sdf(const Image& sdf, const Image& displacement);
@@ -33,6 +39,11 @@ class SurfaceRenderer {
   void upload_pyramid(const Image& level0, const Image& displacement);
   // DIG-DM's grid target (RG32F colour + depth) of this size.
   void ensure_dig_target(int width, int height);
+  void upload_vdm(const PreviewMaps& maps);
+  void upload_dstream(const Mesh& base, const EncodedStream& stream, const std::vector<TangentFrame>& frames);
+  // The dstream level `options` draws (the finest whose segments do not exceed the iteration
+  // budget); sets the vertex shader's uniforms and binds its buffers. -1 without a stream.
+  int bind_dstream(const PreviewOptions& options, const CameraPose& pose);
 
   const Mesh& base_;
   GLuint program_ = 0, vao_ = 0, vbo_ = 0, ibo_ = 0, height_tex_ = 0, normal_tex_ = 0, sdf_tex_ = 0;
@@ -54,9 +65,27 @@ class SurfaceRenderer {
   bool last_per_vertex_ = false;
   GLuint dig_fbo_ = 0, dig_tex_ = 0, dig_depth_ = 0;
   int dig_width_ = 0, dig_height_ = 0;
+  // View-dependent displacement: the weights (RGBA32F array, 4 components per layer), the mean
+  // and basis (R32F, texelFetch), the direction sampling.
+  GLuint vdm_weights_tex_ = 0, vdm_basis_tex_ = 0;
+  int vdm_rank_ = 0, vdm_theta_ = 0, vdm_phi_ = 0;
+  float vdm_theta_max_ = 0, vdm_relief_ = 0, vdm_scale_ = 0, vdm_bias_ = 0, vdm_aspect_ = 1;
+  std::vector<float> vdm_curvatures_;
+  bool vdm_wrap_ = false;
+  // dstream: its program, the base triangles' corners (SSBO), per level the vertices (SSBO)
+  // and the small triangles' indices, an attribute-less vertex array, the capture buffer.
+  GLuint dstream_program_ = 0, dstream_vao_ = 0, dstream_corners_ = 0, dstream_capture_ = 0;
+  std::vector<GLuint> dstream_vertices_, dstream_indices_;
+  std::vector<GLsizei> dstream_vertex_count_, dstream_index_count_;
+  std::vector<int> dstream_segments_;
+  float dstream_min_ = 0, dstream_max_ = 0;
   GLsizei index_count_ = 0;
   float h_min_ = 0, h_max_ = 0;
 };
+
+// The previewer's limits on vdm.exr (uniform arrays in vdm.glsl).
+inline constexpr int kMaxVdmRank = 64;
+inline constexpr int kMaxVdmCurvatures = 64;
 
 // Index of a method name in preview_methods(); throws UsageError if unknown.
 int method_index(const std::string& name);

@@ -9,6 +9,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <string>
 
 namespace meso {
 
@@ -155,6 +157,71 @@ CompressedVdm compress_vdm(const VdmTable& table, double max_rms, int max_rank) 
   }
   c.rms_error = std::sqrt(sq / entries);
   return c;
+}
+
+}  // namespace meso
+
+namespace meso {
+
+std::vector<Image> vdm_images(const CompressedVdm& c, const HeightField& field, const VdmOptions& o) {
+  // Part 0: weights, W x H, one channel per component (one zero channel at rank 0).
+  const int channels = std::max(1, c.rank);
+  Image weights(field.height.width, field.height.height, channels, 0.0f);
+  for (size_t i = 0; i < weights.texel_count(); ++i)
+    for (int k = 0; k < c.rank; ++k)
+      weights.pixels[i * static_cast<size_t>(channels) + static_cast<size_t>(k)] = c.weights[i * static_cast<size_t>(c.rank) + static_cast<size_t>(k)];
+  // Part 1: (rank + 1) x directions, column 0 the mean, column k + 1 component k.
+  Image basis(c.rank + 1, c.directions, 1, 0.0f);
+  for (int j = 0; j < c.directions; ++j) {
+    basis.at(0, j) = c.mean[static_cast<size_t>(j)];
+    for (int k = 0; k < c.rank; ++k) basis.at(k + 1, j) = c.basis[static_cast<size_t>(j) * static_cast<size_t>(c.rank) + static_cast<size_t>(k)];
+  }
+  // Curvatures with 9 significant digits: a float read back is the same float.
+  std::string curvature_list;
+  for (float v : o.curvatures.empty() ? std::vector<float>{0.0f} : o.curvatures) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.9g", static_cast<double>(v));
+    curvature_list += (curvature_list.empty() ? "" : ",") + std::string(text);
+  }
+  weights.metadata = height_field_metadata(field);
+  weights.metadata["quantity"] = std::string("view-dependent displacement (PCA)");
+  weights.metadata["theta"] = o.theta;
+  weights.metadata["theta_max"] = o.theta_max;
+  weights.metadata["phi"] = o.phi;
+  weights.metadata["curvatures"] = curvature_list;
+  weights.metadata["relief"] = o.relief;
+  weights.metadata["rank"] = c.rank;
+  weights.metadata["rms_error"] = static_cast<float>(c.rms_error);
+  weights.metadata["max_error"] = static_cast<float>(c.max_error);
+  weights.metadata["miss"] = kVdmMiss;
+  weights.metadata["layout"] = std::string(
+      "d(texel, dir) = basis[0][dir] + sum_k weights[texel][k] basis[k+1][dir], units of u; dir = (curvature * theta + i) * phi + j; "
+      "theta_i = (i + 0.5) / theta * theta_max, phi_j = 360 j / phi degrees from +u toward +v; d < -0.5: no hit");
+  basis.metadata["quantity"] = std::string("view-dependent displacement basis: column 0 mean, column k + 1 component k, row = direction");
+  return {std::move(weights), std::move(basis)};
+}
+
+}  // namespace meso
+
+namespace meso {
+
+std::vector<float> vdm_curvature_slices(const std::vector<float>& k1, const std::vector<float>& k2, double length_per_u, int steps) {
+  if (k1.empty() || k2.empty()) return {0.0f};
+  // Nearest-rank percentile of a copy.
+  auto percentile = [](std::vector<float> v, double p) {
+    const size_t k = std::min(v.size() - 1, static_cast<size_t>(std::floor(p * static_cast<double>(v.size() - 1) + 0.5)));
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
+    return static_cast<double>(v[k]);
+  };
+  const double lo = std::min(0.0, percentile(k2, 0.05)), hi = std::max(0.0, percentile(k1, 0.95));
+  if (steps <= 1 || hi - lo <= 1e-9) {
+    std::vector<float> mean(k1.size());
+    for (size_t i = 0; i < k1.size(); ++i) mean[i] = 0.5f * (k1[i] + k2[std::min(i, k2.size() - 1)]);
+    return {static_cast<float>(percentile(mean, 0.5) * length_per_u)};
+  }
+  std::vector<float> out;
+  for (int i = 0; i < steps; ++i) out.push_back(static_cast<float>((lo + (hi - lo) * i / (steps - 1)) * length_per_u));
+  return out;
 }
 
 }  // namespace meso

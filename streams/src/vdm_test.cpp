@@ -138,5 +138,24 @@ TEST(Vdm, SameBytesWhateverTheThreadCount) {
   EXPECT_EQ(one_c.basis, many_c.basis);
 }
 
+// Curvature slices from a mesh: a few extreme vertices do not set the range; a flat mesh
+// needs one slice at 0; values are per unit of u.
+TEST(Vdm, CurvatureSlicesIgnoreAFewSharpVertices) {
+  std::vector<float> k1(100, 0.5f), k2(100, 0.0f);
+  k1[3] = 500.0f;   // a bevel
+  k2[7] = -300.0f;
+  const std::vector<float> s = vdm_curvature_slices(k1, k2, 2.0, 3);
+  ASSERT_EQ(s.size(), 3u);
+  EXPECT_FLOAT_EQ(s[0], 0.0f);
+  EXPECT_FLOAT_EQ(s[1], 0.5f);
+  EXPECT_FLOAT_EQ(s[2], 1.0f);
+  const std::vector<float> flat = vdm_curvature_slices(std::vector<float>(10, 0.0f), std::vector<float>(10, 0.0f), 2.0, 4);
+  ASSERT_EQ(flat.size(), 1u);
+  EXPECT_EQ(flat[0], 0.0f);
+  const std::vector<float> one = vdm_curvature_slices(k1, k2, 2.0, 1);
+  ASSERT_EQ(one.size(), 1u);
+  EXPECT_FLOAT_EQ(one[0], 0.5f);  // the median mean curvature 0.25, times 2
+}
+
 }  // namespace
 }  // namespace meso

@@ -78,4 +78,19 @@ DecodedVertex decode_vertex(uint64_t v, float min_value, float max_value);
 // vertices. Throws on I/O errors.
 void write_displacement_stream(const EncodedStream& stream, int base_vertices, int base_triangles, const std::string& path);
 
+// Reads such a file (max_error is not stored: 0). The base mesh's vertex and triangle counts
+// it was made for go to *base_vertices and *base_triangles. Throws InputError naming `path`
+// when it is missing, truncated, of another version, or inconsistent (segments not 2^l, a
+// level's vertex count, a vertex's triangle or (i, j) out of range).
+EncodedStream read_displacement_stream(const std::string& path, int* base_vertices, int* base_triangles);
+
+// The point and direction of vertex (i, j) of triangle t at `segments` per edge, exactly as
+// sample_displacement_stream computes them (object units; n interpolated, not normalised).
+void displacement_stream_point(const Mesh& base, int t, int segments, int i, int j, OpenMesh::Vec3d& p, OpenMesh::Vec3d& n);
+
+// The decoded positions of level `level`, in the stream's vertex order: P + d N/|N| with
+// d = (1 - morph) coarse + morph value (morph 1: the level itself, 0: what the coarser level
+// interpolates there), P and N from displacement_stream_point (a zero N gives P).
+std::vector<Vec3f> decode_displacement_level(const Mesh& base, const EncodedStream& stream, int level, float morph = 1.0f);
+
 }  // namespace meso

@@ -2,10 +2,12 @@
 // headless through EGL (Mesa llvmpipe in CI) or in a GLFW window; OpenGL 4.5 core.
 #pragma once
 
+#include "meso/bake/displacement_stream.hpp"
 #include "meso/core/image.hpp"
 #include "meso/core/mesh.hpp"
 
 #include <cstddef>
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
@@ -29,16 +31,32 @@ struct PreviewMaps {
   // height_scale/bias, border. The coarser levels are rebuilt from it exactly as the streams
   // build them (min_max_pyramid_from_level0).
   Image pyramid;
+  // vdm.exr (meso streams vdm), its two parts as read_image_parts returns them: the per-texel
+  // PCA weights (W x H, one channel per component; metadata theta, theta_max, phi,
+  // curvatures, relief, rank, height_scale/bias, border) and the mean and basis per direction
+  // ((rank + 1) x directions). See docs/formats.md.
+  Image vdm_weights, vdm_basis;
+  // dstream.bin (meso streams dstream) for the base mesh: every level's compressed vertices.
+  // Empty (no levels) when not loaded.
+  EncodedStream dstream;
 };
 
 // The stream file a method needs in --streams DIR ("sdf.exr", "cone.exr",
-// "relaxed-cone.exr", "pyramid.exr"), or "" for none.
+// "relaxed-cone.exr", "pyramid.exr", "vdm.exr", "dstream.bin"), or "" for none.
 std::string required_stream(const std::string& method);
 
-// The member of `maps` that holds the stream `required_stream(method)`, or nullptr when the
-// method needs none.
-const Image* stream_for(const PreviewMaps& maps, const std::string& method);
-Image* stream_for(PreviewMaps& maps, const std::string& method);
+// Whether `maps` holds what `method` needs (true for a method that needs no stream).
+bool has_stream(const PreviewMaps& maps, const std::string& method);
+
+// Reads `file` into the member of `maps` that holds the stream `required_stream(method)` and
+// checks that it belongs to this displacement map (image streams: size, height range, kind)
+// or, for dstream.bin, to this base mesh (vertex and triangle counts). Throws InputError
+// naming `file` when it is missing, unreadable or made from something else; `maps` is left
+// unchanged then. Nothing for a method that needs no stream.
+void load_stream(PreviewMaps& maps, const Mesh& base, const std::string& method, const std::filesystem::path& file);
+
+// Empties the member of `maps` that holds the stream of `method`.
+void clear_stream(PreviewMaps& maps, const std::string& method);
 
 // Throws InputError naming `name` unless `sdf` is meso streams sdf's output for exactly this
 // displacement map (its size and the height range it normalised).
@@ -48,6 +66,11 @@ void check_sdf_matches(const Image& sdf, const Image& displacement, const std::s
 // relaxed-cone (kind "relaxed") output for exactly this displacement map: its size, the
 // height range it normalised, 3 channels and the kind.
 void check_cone_matches(const Image& cone, const Image& displacement, const std::string& kind, const std::string& name);
+
+// Throws InputError naming `name` unless `weights` and `basis` are the two parts of meso streams
+// vdm's output for exactly this displacement map (size, height range, parts' shapes), with
+// increasing curvatures, rank and curvature count at most 64 (the previewer's limit).
+void check_vdm_matches(const Image& weights, const Image& basis, const Image& displacement, const std::string& name);
 
 // Throws InputError naming `name` unless `pyramid` is meso streams pyramid's output (level 0)
 // for exactly this displacement map: its size, 2 channels, the height range it normalised.
@@ -96,9 +119,17 @@ struct PreviewOptions {
   PreviewShadows shadows = PreviewShadows::none;
   int shadow_steps = 32;
   float light_size = 4.0f;  // degrees, angular radius of the soft shadows' light
+  // dstream: the level drawn is the finest whose segments per edge do not exceed
+  // `iterations`. Its vertices morph toward the coarser level's surface: with morph in [0, 1]
+  // all by that much (1: the level itself, 0: what the coarser level interpolates there);
+  // with morph < 0 by distance from the eye, 1 up to lod_distance (object units), 0 from
+  // twice that on (lod_distance 0: no morph).
+  float morph = -1.0f;
+  float lod_distance = 0.0f;
 };
 
-// Method names this build renders, in the order of the survey.
+// Method names this build renders: per vertex mesh, tessellation; per pixel in the order of
+// the survey; then vdm (per pixel, vdm.exr) and dstream (per vertex, dstream.bin).
 const std::vector<std::string>& preview_methods();
 
 // Renders one frame off screen. Returns RGBA float pixels, top row first; alpha is 1 on
@@ -128,6 +159,12 @@ class HeadlessPreview {
   // milliseconds: the median of `repetitions` draws after one unmeasured warm-up draw (Mesa
   // compiles shader variants on first use).
   double time_draw(const PreviewOptions& options, int repetitions = 5);
+
+  // The dstream method's displaced vertices for `options` (the level and morph it would
+  // draw), as its vertex shader computes them (captured by transform feedback), in the
+  // level's order in dstream.bin; to check the GPU decoder against
+  // decode_displacement_level(). Empty when no dstream is loaded.
+  std::vector<Vec3f> dstream_positions(const PreviewOptions& options);
 
  private:
   struct Impl;

@@ -50,6 +50,14 @@ struct VdmTable {
 // tiles; under Border::clamp a ray leaving the map is a miss.
 VdmTable build_vdm(const HeightField& field, const VdmOptions& options, Progress& progress = null_progress());
 
+// The curvature slices a base mesh needs (per unit of u), from its vertices' principal
+// curvatures k1 >= k2 (1 / object units, vdm.hpp's sign) and its object length per unit of u:
+// `steps` values evenly over [5th percentile of k2, 95th percentile of k1] (a few sharp
+// vertices, such as a bevel's, would otherwise stretch the range and starve the rest; the
+// previewer clamps curvatures outside to the nearest slice); one value, the median of
+// (k1 + k2) / 2, when steps is 1 or the range is empty. Deterministic.
+std::vector<float> vdm_curvature_slices(const std::vector<float>& k1, const std::vector<float>& k2, double length_per_u, int steps);
+
 // Truncated PCA of the table seen as a texels x directions matrix D: D ~ m + W B^T, m the
 // column means, B (directions x rank) the covariance's leading eigenvectors, W = (D - m) B.
 // The rank is the smallest whose RMS error over all entries (misses counted as kVdmMiss) is
@@ -64,5 +72,11 @@ struct CompressedVdm {
   size_t bytes() const { return (mean.size() + basis.size() + weights.size()) * sizeof(float); }
 };
 CompressedVdm compress_vdm(const VdmTable& table, double max_rms, int max_rank);
+
+// The two parts of vdm.exr (docs/formats.md): part 0 the weights, W x H, one channel per
+// component (one zero channel at rank 0), with the height field's metadata and the sampling
+// (theta, theta_max, phi, curvatures, relief, rank, rms_error, max_error, miss, layout); part 1
+// (rank + 1) x directions, column 0 the mean, column k + 1 component k.
+std::vector<Image> vdm_images(const CompressedVdm& vdm, const HeightField& field, const VdmOptions& options);
 
 }  // namespace meso
