@@ -107,6 +107,9 @@ void add_preview(CLI::App& app, Context& ctx) {
   sub->add_option("--light-elevation", args->options.camera.light_elevation, "Light: degrees above the mesh's mean plane")
       ->check(CLI::Range(-90.0, 90.0) & Finite);
   sub->add_option("--light-azimuth", args->options.camera.light_azimuth, "Light: degrees around the mean normal")->check(Finite);
+  sub->add_flag("--silhouettes", args->options.silhouettes,
+                "Curved rays for steep/relief/pom (the base's curvature along the view, section 5.1 of the survey; rays that "
+                "leave the surface are discarded) and, on maps that do not tile, discard visible points off the map");
   sub->add_option("--morph", args->options.morph,
                   "dstream: morph every vertex toward the coarser level by this much (1: the level drawn, 0: the coarser level's surface); "
                   "default: by distance (--lod-distance)")

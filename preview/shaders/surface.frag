@@ -87,19 +87,44 @@ void main() {
     // toward the eye) to h = h_min; s is object-space length along the view ray from the base
     // point. Steep parallax stops at the first sample below the surface; relief mapping
     // refines by binary search (4.4.1), POM by one secant step (4.4.2).
+    // With silhouettes on a curved base (section 5.1) the base falls away from the tangent
+    // plane by c x^2 / 2 at horizontal distance x, c the curvature along the view: the ray's
+    // height over the bent base is z(s) = dir.z s + bend s^2, bend = c sin^2(theta) / 2. The
+    // search then ends where z reaches h_min or, when it never does, where it climbs back
+    // to h_max; a ray that meets nothing there left the surface (discarded).
+    float bend = u_silhouettes != 0 ? 0.5 * view_curvature(view, nn) * (1.0 - dir.z * dir.z) : 0.0;
     float s_in = u_h_max / dir.z;
     float s_out = u_h_min / dir.z;
+    bool escapes = false;
+    if (bend != 0.0) {
+      // z(s) = h at the root nearest the straight ray's h / dir.z, in the form that stays
+      // exact as bend -> 0: s = 2 h / (dir.z - sqrt(dir.z^2 + 4 bend h)).
+      float disc_in = dir.z * dir.z + 4.0 * bend * u_h_max;
+      // A concave base whose arc never rises to h_max: start at its top.
+      s_in = disc_in >= 0.0 ? 2.0 * u_h_max / (dir.z - sqrt(disc_in)) : -dir.z / (2.0 * bend);
+      float disc = dir.z * dir.z + 4.0 * bend * u_h_min;
+      if (disc >= 0.0) {
+        s_out = 2.0 * u_h_min / (dir.z - sqrt(disc));
+      } else {
+        // Convex base: the ray never gets down to h_min; it leaves through the top again.
+        s_out = (-dir.z + sqrt(max(disc_in, 0.0))) / (2.0 * bend);
+        escapes = true;
+      }
+    }
     int steps = max(u_iterations, 1);
     float s_prev = s_in;
-    float d_prev = dir.z * s_in - height_at(v_uv + dir.xy * s_in);  // ray height minus surface height
+    float d_prev = dir.z * s_in + bend * s_in * s_in - height_at(v_uv + dir.xy * s_in);  // ray height minus surface height
     float s_hit = s_out;
+    bool found = false;
     if (d_prev <= 0.0) {
       s_hit = s_in;
+      found = true;
     } else {
       for (int i = 1; i <= steps; ++i) {
         float s = mix(s_in, s_out, float(i) / float(steps));
-        float d = dir.z * s - height_at(v_uv + dir.xy * s);
+        float d = dir.z * s + bend * s * s - height_at(v_uv + dir.xy * s);
         if (d <= 0.0) {
+          found = true;
           if (u_method == kSteep) {
             s_hit = s;
           } else if (u_method == kPom) {
@@ -109,7 +134,7 @@ void main() {
             float above = s_prev, below = s;
             for (int j = 0; j < kReliefBinarySteps; ++j) {
               float mid = 0.5 * (above + below);
-              if (dir.z * mid - height_at(v_uv + dir.xy * mid) <= 0.0) below = mid;
+              if (dir.z * mid + bend * mid * mid - height_at(v_uv + dir.xy * mid) <= 0.0) below = mid;
               else above = mid;
             }
             s_hit = 0.5 * (above + below);
@@ -120,6 +145,7 @@ void main() {
         d_prev = d;
       }
     }
+    if (!found && (escapes || (u_silhouettes != 0 && bend != 0.0))) discard;  // the ray left the surface
     uv = v_uv + dir.xy * s_hit;
   } else if ((u_method == kCone || u_method == kRelaxedCone) && facing) {
     uv = v_uv + dir.xy * cone_trace(dir, u_method == kRelaxedCone);
@@ -136,6 +162,10 @@ void main() {
   } else if (u_method == kVdm && facing) {
     if (!vdm_trace(view, tn, bn, nn, dir, uv)) discard;  // the ray left the bent height field
   }
+
+  // Silhouettes at the map's border: a visible point outside [0, 1]^2 of a map that does not
+  // tile is off the surface's footprint.
+  if (u_silhouettes != 0 && u_wrap == 0 && (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0))))) discard;
 
   // The visible point's depth, so that displaced surfaces intersect each other correctly (the
   // point where the view ray is at the visible point's height: exact for the search methods,

@@ -29,6 +29,8 @@ uniform mat4 u_view_projection;  // object space to clip space (depth correction
 uniform int u_shadows;        // 0 none, 1 hard, 2 soft (PreviewShadows)
 uniform int u_shadow_steps;   // samples along a shadow ray
 uniform float u_light_size;   // radians, angular radius of the soft shadows' light
+uniform int u_silhouettes;    // 1: curved rays (section 5.1) and footprint discard
+uniform int u_wrap;           // 1: the maps tile
 uniform float u_h_min;
 uniform float u_h_max;
 uniform sampler3D u_sdf;      // meso streams sdf: R = distance in units of u (bound when used)
@@ -72,6 +74,20 @@ layout(location = 1) out vec2 out_fetches;
 // adds one, a filtered lookup (4 texels blended by the sampler) as much as a texelFetch. The
 // shading's own lookups at the visible point are not counted.
 int g_fetches = 0;
+
+in vec3 v_curvature_dir;  // principal direction d1, object space (0 where no curvature was fitted)
+in vec2 v_curvature;      // k1 >= k2, 1 / object units, positive where the base falls away from its normal
+
+// Curvature of the base along the view's horizontal direction, 1 / object units (survey
+// section 5.1 with Euler's theorem): k1 cos^2(alpha) + k2 sin^2(alpha), alpha the angle from d1.
+float view_curvature(vec3 view, vec3 nn) {
+  vec3 across = view - nn * dot(view, nn);
+  if (dot(across, across) < 1e-12 || dot(v_curvature_dir, v_curvature_dir) == 0.0) return 0.0;
+  vec3 d1 = v_curvature_dir - nn * dot(v_curvature_dir, nn);
+  if (dot(d1, d1) < 1e-12) return 0.0;
+  float ca = dot(normalize(d1), normalize(across));
+  return v_curvature.x * ca * ca + v_curvature.y * (1.0 - ca * ca);
+}
 
 // Explicit level of detail: loops have no implicit derivatives (divergent control flow).
 float height_lookup(vec2 uv) { return textureLod(u_height, uv, 0.0).r; }

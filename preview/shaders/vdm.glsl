@@ -35,9 +35,6 @@ uniform float u_vdm_scale;             // object height = bias + scale * normali
 uniform float u_vdm_bias;
 uniform float u_vdm_aspect;            // H / W of the map
 
-in vec3 v_curvature_dir;  // d1, object space (0 when no curvature was fitted)
-in vec2 v_curvature;      // k1, k2, 1 / object units
-
 const int kVdmMaxLayers = 16;  // rank <= 64 (renderer.hpp's kMaxVdmRank)
 
 // One table entry from the interpolated weights.
@@ -65,14 +62,8 @@ bool vdm_trace(vec3 view, vec3 tn, vec3 bn, vec3 nn, vec3 dir, out vec2 uv) {
 
   // Curvature along the view direction, per unit of u.
   vec3 across = view - nn * dot(view, nn);
-  float c = 0.0;
-  if (dot(across, across) > 1e-12 && dot(v_curvature_dir, v_curvature_dir) > 0.0) {
-    vec3 d1 = v_curvature_dir - nn * dot(v_curvature_dir, nn);
-    float ca = dot(dot(d1, d1) > 1e-12 ? normalize(d1) : d1, normalize(across));
-    float per_object = v_curvature.x * ca * ca + v_curvature.y * (1.0 - ca * ca);
-    float object_per_u = len_h > 1e-20 ? length(across) / len_h : v_uv_scale.x;
-    c = per_object * object_per_u;
-  }
+  float object_per_u = len_h > 1e-20 ? length(across) / len_h : v_uv_scale.x;
+  float c = view_curvature(view, nn) * object_per_u;
 
   // Entry point: where the ray is at the top of the height field (normalised height 1).
   vec2 entry = v_uv + dir.xy * ((u_vdm_bias + u_vdm_scale) / dir.z);

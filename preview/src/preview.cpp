@@ -281,6 +281,7 @@ void run_window(const Mesh& base, const PreviewMaps& maps, const PreviewOptions&
     if (key == GLFW_KEY_MINUS || key == GLFW_KEY_KP_SUBTRACT) s->options.iterations = std::max(s->options.iterations / 2, 1);
     if (key == GLFW_KEY_S)  // none -> hard -> soft shadows
       s->options.shadows = static_cast<PreviewShadows>((static_cast<int>(s->options.shadows) + 1) % 3);
+    if (key == GLFW_KEY_C) s->options.silhouettes = !s->options.silhouettes;
     if (key == GLFW_KEY_LEFT) s->options.camera.light_azimuth -= 10.0f;
     if (key == GLFW_KEY_RIGHT) s->options.camera.light_azimuth += 10.0f;
     if (key == GLFW_KEY_UP) s->options.camera.light_elevation = std::min(s->options.camera.light_elevation + 5.0f, 90.0f);
@@ -297,9 +298,9 @@ void run_window(const Mesh& base, const PreviewMaps& maps, const PreviewOptions&
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     char title[256];
     static const char* const shadow_names[3] = {"no shadows", "hard shadows", "soft shadows"};
-    std::snprintf(title, sizeof title, "meso preview | %s | %d iterations | view %.1f deg | %s | %.2f ms", state.options.method.c_str(),
+    std::snprintf(title, sizeof title, "meso preview | %s | %d iterations | view %.1f deg | %s%s | %.2f ms", state.options.method.c_str(),
                   state.options.iterations, static_cast<double>(state.options.camera.view_angle),
-                  shadow_names[static_cast<int>(state.options.shadows)], ms);
+                  shadow_names[static_cast<int>(state.options.shadows)], state.options.silhouettes ? " | silhouettes" : "", ms);
     glfwSetWindowTitle(window, title);
     glfwSwapBuffers(window);
     glfwWaitEventsTimeout(0.1);

@@ -821,6 +821,54 @@ TEST(Measure, TessellationIsCrackFree) {
   }
 }
 
+// Silhouettes: on a flat base curved rays are straight (same image inside the map); visible
+// points that parallax pushes off a map that does not tile are discarded; on a convex base an
+// inward displacement lets grazing rays pass under the surface's lowest point and leave it.
+TEST(Preview, SilhouettesDiscardRaysThatLeaveTheSurface) {
+  const Mesh quad = test::make_grid(1, 1);
+  const PreviewMaps raised = maps_with_height([](float u) { return 0.05f + 0.05f * u; });
+  PreviewOptions o = view_options("pom", 60.0f, 20.0f, 64, PreviewShade::uv);
+  const Image plain = render_headless(quad, raised, o);
+  o.silhouettes = true;
+  const Image cut = render_headless(quad, raised, o);
+  size_t plain_on = 0, cut_on = 0, outside = 0, differ = 0;
+  for (size_t i = 0; i < cut.texel_count(); ++i) {
+    plain_on += plain.pixels[4 * i + 3] > 0.5f;
+    const bool on = cut.pixels[4 * i + 3] > 0.5f;
+    cut_on += on;
+    if (!on) continue;
+    const float u = cut.pixels[4 * i], v = cut.pixels[4 * i + 1];
+    outside += u < 0 || u > 1 || v < 0 || v > 1;
+    differ += std::abs(u - plain.pixels[4 * i]) + std::abs(v - plain.pixels[4 * i + 1]) > 0;
+  }
+  EXPECT_EQ(outside, 0u);
+  EXPECT_EQ(differ, 0u) << "a flat base bends no ray";
+  EXPECT_LT(cut_on, plain_on);
+  EXPECT_GT(cut_on, plain_on / 2);
+
+  const Mesh cylinder = test::make_parametric(24, 20, [](double s, double t) {
+    const double a = 2.4 * (s - 0.5);
+    return Vec3f(float(0.5 * std::sin(a)), float(t), float(0.5 * (std::cos(a) - 1.0)));
+  }, false, false);
+  const PreviewMaps sunk = maps_with_height([](float) { return -0.04f; });  // a sunken layer
+  PreviewOptions g = view_options("relief", 70.0f, 0.0f, 64, PreviewShade::uv);
+  const Image straight = render_headless(cylinder, sunk, g);
+  g.silhouettes = true;
+  const Image bent = render_headless(cylinder, sunk, g);
+  size_t straight_on = 0, bent_on = 0, escaped = 0;
+  for (size_t i = 0; i < bent.texel_count(); ++i) {
+    straight_on += straight.pixels[4 * i + 3] > 0.5f;
+    bent_on += bent.pixels[4 * i + 3] > 0.5f;
+    // Discarded although the straight ray's point was well inside the map: an escape.
+    const float u = straight.pixels[4 * i], v = straight.pixels[4 * i + 1];
+    escaped += straight.pixels[4 * i + 3] > 0.5f && bent.pixels[4 * i + 3] < 0.5f && u > 0.05f && u < 0.95f && v > 0.05f && v < 0.95f;
+    for (int c = 0; c < 4; ++c) ASSERT_TRUE(std::isfinite(bent.pixels[4 * i + static_cast<size_t>(c)]));
+  }
+  std::printf("silhouettes: flat %zu -> %zu pixels, cylinder %zu -> %zu (%zu escaped)\n", plain_on, cut_on, straight_on, bent_on, escaped);
+  EXPECT_LT(bent_on, straight_on);
+  EXPECT_GT(escaped, 0u) << "rays that pass under the bent surface leave it";
+}
+
 // ---- vdm and dstream (issue 8) ----
 
 // On a flat base the view-dependent displacement map finds the reference's visible points:

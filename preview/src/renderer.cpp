@@ -297,9 +297,8 @@ SurfaceRenderer::SurfaceRenderer(const Mesh& base, const PreviewMaps& maps) : ba
   const auto frames = compute_tangent_frames(m);
   store_tangents(m, frames);
   const CornerSplit split = split_corners(m);
-  // The principal curvatures (vdm's curvature along the view), fitted only when it is loaded.
-  std::vector<VertexCurvature> curvature;
-  if (!maps.vdm_weights.empty()) curvature = fit_curvature(m);
+  // The principal curvatures (curvature along the view: vdm, and the silhouettes' curved rays).
+  const std::vector<VertexCurvature> curvature = fit_curvature(m);
   constexpr size_t kStride = 3 + 3 + 2 + 4 + 2 + 3 + 2;
   std::vector<float> verts(split.corner.size() * kStride);
   for (size_t i = 0; i < split.corner.size(); ++i) {
@@ -308,8 +307,7 @@ SurfaceRenderer::SurfaceRenderer(const Mesh& base, const PreviewMaps& maps) : ba
     const auto& fr = frames[static_cast<size_t>(h.idx())];
     const Vec3f p = m.point(v), nv = m.normal(v);
     const Vec2f uv = m.texcoord2D(h);
-    const VertexCurvature k = curvature.empty() ? VertexCurvature{0, 0, Vec3f(0, 0, 0), Vec3f(0, 0, 0), 0}
-                                                : curvature[static_cast<size_t>(v.idx())];
+    const VertexCurvature k = curvature[static_cast<size_t>(v.idx())];
     float* o = &verts[i * kStride];
     const float values[kStride] = {p[0], p[1], p[2], nv[0], nv[1], nv[2], uv[0], uv[1],
                                    fr.tangent[0], fr.tangent[1], fr.tangent[2], fr.sign, fr.du_length, fr.dv_length,
@@ -707,6 +705,7 @@ void SurfaceRenderer::draw(const PreviewOptions& o, int width, int height) {
   glUniform1i(glGetUniformLocation(prog, "u_shadow_steps"), std::clamp(o.shadow_steps, 1, 4096));
   glUniform1f(glGetUniformLocation(prog, "u_light_size"), o.light_size * 3.14159265f / 180.0f);
   glUniform1f(glGetUniformLocation(prog, "u_h_min"), h_min_);
+  glUniform1i(glGetUniformLocation(prog, "u_silhouettes"), o.silhouettes ? 1 : 0);
   glUniform1f(glGetUniformLocation(prog, "u_h_max"), h_max_);
   const int cone = o.method == "cone" ? 0 : o.method == "relaxed-cone" ? 1 : -1;
   const bool pyramid = o.method == "pyramid";
@@ -725,6 +724,7 @@ void SurfaceRenderer::draw(const PreviewOptions& o, int width, int height) {
                                       (cone_tex_[1] && cone_wrap_[1]) || (pyramid_tex_ && pyramid_wrap_) ||
                                       (vdm_weights_tex_ && vdm_wrap_);
   const GLint wrap_mode = wrap ? GL_REPEAT : GL_CLAMP_TO_EDGE;
+  glUniform1i(glGetUniformLocation(prog, "u_wrap"), wrap ? 1 : 0);
   for (GLuint tex : {height_tex_, normal_tex_}) {
     glBindTexture(GL_TEXTURE_2D, tex);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, wrap_mode);

@@ -119,6 +119,11 @@ struct PreviewOptions {
   PreviewShadows shadows = PreviewShadows::none;
   int shadow_steps = 32;
   float light_size = 4.0f;  // degrees, angular radius of the soft shadows' light
+  // Silhouettes (survey section 5.1): the linear-search methods (steep, relief, pom) bend the
+  // view ray with the base's curvature along it (quadric fits per vertex) and discard it when
+  // it leaves the height field without a hit; every per-pixel method discards a visible point
+  // outside [0, 1]^2 of a map that does not tile. Off by default (compare_methods keeps it).
+  bool silhouettes = false;
   // dstream: the level drawn is the finest whose segments per edge do not exceed
   // `iterations`. Its vertices morph toward the coarser level's surface: with morph in [0, 1]
   // all by that much (1: the level itself, 0: what the coarser level interpolates there);
@@ -295,7 +300,7 @@ Image fetch_heatmap(const Image& fetches, double max_fetches);
 // Opens a window and renders interactively until it is closed: left drag orbits, wheel
 // zooms, 1-9 and 0 choose among the first ten methods, Tab (Shift+Tab) goes to the next
 // (previous) method, +/- change the iteration budget, S cycles the shadows (none, hard,
-// soft), the arrow keys move the light; methods whose stream was not loaded are skipped; the
+// soft), C toggles silhouettes, the arrow keys move the light; methods whose stream was not loaded are skipped; the
 // title line shows the method, its budget, the view angle, the shadows and the frame time.
 // Throws InternalError when no display is available.
 void run_window(const Mesh& base, const PreviewMaps& maps, const PreviewOptions& options);
