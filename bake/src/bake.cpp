@@ -337,6 +337,16 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
     // use is traced: the nearest rules stop after the first hit's bunch (continuations
     // reach only `bunch` further, cheap rays); the others go on through the reach.
     const bool all_hits = o.hit == HitRule::furthest;
+    // A hit at ray distance t of a ray that started eps behind the base point, going `way`.
+    auto make_hit = [&](int way, float distance, uint32_t prim, float u, float v) {
+      RayHit rh;
+      rh.d = static_cast<float>(way) * (distance - eps);
+      rh.front = scene.face_normal(prim).dot(base_normal) > 0;
+      rh.prim = prim;
+      rh.u = u;
+      rh.v = v;
+      return rh;
+    };
     // The common case in one traversal: the loop below casts for the nearest hit, then asks
     // whether anything lies within `bunch` behind it (usually nothing). collect() reports
     // every triangle the ray crosses up to a little past the nearest one's bunch, with the
@@ -370,12 +380,7 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
       const RayScene::Candidate& h = c.hit[first];
       for (int j = 0; j < c.n; ++j)
         if (c.hit[j].t == h.t && c.hit[j].prim != h.prim) return false;  // a tie: Embree's pick
-      RayHit rh;
-      rh.d = static_cast<float>(way) * (h.t - eps);
-      rh.front = scene.face_normal(h.prim).dot(base_normal) > 0;
-      rh.prim = h.prim;
-      rh.u = h.u;
-      rh.v = h.v;
+      const RayHit rh = make_hit(way, h.t, h.prim, h.u, h.v);
       if (!(o.hit == HitRule::nearest || rh.front)) return false;  // the loop goes on
       const float tnear = std::nextafter(h.t, tfar) + 1e-7f * (h.t + eps);
       const float tstop = std::min(tfar, h.t + r.bunch);
@@ -397,12 +402,7 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
       for (int k = 0; k < 16; ++k) {
         const auto h = scene.intersect(org, dir_s, tnear, tfar);
         if (!h.valid()) break;
-        RayHit rh;
-        rh.d = static_cast<float>(way) * (h.t - eps);
-        rh.front = scene.face_normal(h.prim).dot(base_normal) > 0;
-        rh.prim = h.prim;
-        rh.u = h.u;
-        rh.v = h.v;
+        const RayHit rh = make_hit(way, h.t, h.prim, h.u, h.v);
         // Past the hit (by a relative step that float coordinates resolve).
         tnear = std::nextafter(h.t, tfar) + 1e-7f * (h.t + eps);
         if (!(o.ignore_backfaces && !rh.front)) {

@@ -77,9 +77,8 @@ class RayScene {
     float u = 0, v = 0;
     bool valid() const { return std::isfinite(t); }
   };
-  Hit intersect(const Vec3f& org, const Vec3f& dir, float tnear, float tfar) const {
-    RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
+  // A ray from org along dir over [tnear, tfar], with no hit yet.
+  static RTCRayHit ray_hit(const Vec3f& org, const Vec3f& dir, float tnear, float tfar) {
     RTCRayHit rh{};
     rh.ray.org_x = org[0];
     rh.ray.org_y = org[1];
@@ -91,6 +90,12 @@ class RayScene {
     rh.ray.tfar = tfar;
     rh.ray.mask = 0xFFFFFFFFu;
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    return rh;
+  }
+  Hit intersect(const Vec3f& org, const Vec3f& dir, float tnear, float tfar) const {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    RTCRayHit rh = ray_hit(org, dir, tnear, tfar);
     rtcIntersect1(scene_, &ctx, &rh);
     Hit h;
     if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) {
@@ -105,16 +110,7 @@ class RayScene {
   bool occluded(const Vec3f& org, const Vec3f& dir, float tnear, float tfar) const {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
-    RTCRay ray{};
-    ray.org_x = org[0];
-    ray.org_y = org[1];
-    ray.org_z = org[2];
-    ray.dir_x = dir[0];
-    ray.dir_y = dir[1];
-    ray.dir_z = dir[2];
-    ray.tnear = tnear;
-    ray.tfar = tfar;
-    ray.mask = 0xFFFFFFFFu;
+    RTCRay ray = ray_hit(org, dir, tnear, tfar).ray;
     rtcOccluded1(scene_, &ctx, &ray);
     return ray.tfar < 0;  // Embree marks an occluded ray with tfar = -inf
   }
@@ -144,17 +140,7 @@ class RayScene {
     cc.cap = tfar;
     out.n = 0;
     out.overflow = false;
-    RTCRayHit rh{};
-    rh.ray.org_x = org[0];
-    rh.ray.org_y = org[1];
-    rh.ray.org_z = org[2];
-    rh.ray.dir_x = dir[0];
-    rh.ray.dir_y = dir[1];
-    rh.ray.dir_z = dir[2];
-    rh.ray.tnear = tnear;
-    rh.ray.tfar = tfar;
-    rh.ray.mask = 0xFFFFFFFFu;
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    RTCRayHit rh = ray_hit(org, dir, tnear, tfar);
     rtcIntersect1(scene_, &cc.ctx, &rh);
     return !out.overflow;
   }

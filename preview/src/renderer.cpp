@@ -263,6 +263,15 @@ void assign_texture_units(GLuint program) {
   for (GLint unit = 0; unit < 8; ++unit) glUniform1i(glGetUniformLocation(program, names[unit]), unit);
 }
 
+// Filtering and border of the texture bound to `target`: linear, repeat or clamp in s and t.
+void set_linear_sampling(GLenum target, bool wrap) {
+  glTexParameteri(target, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  glTexParameteri(target, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  const GLint wrap_mode = wrap ? GL_REPEAT : GL_CLAMP_TO_EDGE;
+  glTexParameteri(target, GL_TEXTURE_WRAP_S, wrap_mode);
+  glTexParameteri(target, GL_TEXTURE_WRAP_T, wrap_mode);
+}
+
 GLuint upload_texture(const Image& img, int channels) {
   // Image rows are top row first; OpenGL's first row is v = 0 (bottom): flip on upload so
   // texture(s, uv) uses meso's UV convention directly.
@@ -397,11 +406,7 @@ void SurfaceRenderer::upload_sdf(const Image& sdf, const Image& displacement) {
   glBindTexture(GL_TEXTURE_3D, sdf_tex_);
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
   glTexImage3D(GL_TEXTURE_3D, 0, GL_R32F, w, h, depth, 0, GL_RED, GL_FLOAT, voxels.data());
-  glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-  glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-  const GLint wrap_mode = wrap ? GL_REPEAT : GL_CLAMP_TO_EDGE;
-  glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_WRAP_S, wrap_mode);
-  glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_WRAP_T, wrap_mode);
+  set_linear_sampling(GL_TEXTURE_3D, wrap);
   glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_WRAP_R, GL_CLAMP_TO_EDGE);
 }
 
@@ -491,11 +496,7 @@ void SurfaceRenderer::upload_vdm(const PreviewMaps& maps) {
   glBindTexture(GL_TEXTURE_2D_ARRAY, vdm_weights_tex_);
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
   glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_RGBA32F, w, h, layers, 0, GL_RGBA, GL_FLOAT, texels.data());
-  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-  const GLint wrap_mode = vdm_wrap_ ? GL_REPEAT : GL_CLAMP_TO_EDGE;
-  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, wrap_mode);
-  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, wrap_mode);
+  set_linear_sampling(GL_TEXTURE_2D_ARRAY, vdm_wrap_);
   // Mean and basis: row = direction, as stored (read with texelFetch by direction index).
   std::vector<float> table(basis.pixels.size());
   for (int y = 0; y < basis.height; ++y)
