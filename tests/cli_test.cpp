@@ -527,6 +527,31 @@ TEST(CliMeshreduce, ProgressiveErrors) {
   EXPECT_FALSE(fs::exists(out));
 }
 
+// --report-regions: the faces of the output farther from the input than E, grouped; the
+// worst region's distance is the measured Hausdorff distance (one measure everywhere).
+TEST(CliMeshreduce, RegionsBeyondTheThreshold) {
+  test::TempDir d;
+  Mesh high = test::make_grid(16, 16);
+  for (auto v : high.vertices()) {
+    const Vec3f p = high.point(v);
+    if (std::abs(p[0] - 0.25f) < 1e-6f && std::abs(p[1] - 0.75f) < 1e-6f) high.set_point(v, Vec3f(p[0], p[1], 0.3f));
+  }
+  write_mesh(high, d / "spike.obj");
+  const std::string in = (d / "spike.obj").string(), out = (d / "out.obj").string();
+  const Result r = run("meshreduce " + in + " -o " + out + " --faces 8 --max-normal-deviation 180 --report-regions 0.05 --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto report = nlohmann::json::parse(r.out);
+  const auto& regions = report["regions"];
+  EXPECT_EQ(regions["threshold"], 0.05);
+  ASSERT_GE(regions["count"].get<size_t>(), 1u);
+  EXPECT_NEAR(regions["largest"][0]["max_distance"].get<double>(), report["error"]["hausdorff"].get<double>(), 1e-9);
+  EXPECT_NE(r.err.find("regions"), std::string::npos) << "one warning line says so";
+  const Result none = run("meshreduce " + in + " -o " + out + " --faces 8 --max-normal-deviation 180 --report-regions 100% --json");
+  ASSERT_EQ(none.code, 0) << none.err;
+  EXPECT_EQ(nlohmann::json::parse(none.out)["regions"]["count"], 0);
+  EXPECT_EQ(run("meshreduce " + in + " -o " + out + " --faces 8 --report-regions -1").code, 2);
+}
+
 TEST(CliMeshreduce, LocksAndTheTargetOutOfReach) {
   test::TempDir d;
   const std::string in = (d / "grid.obj").string(), out = (d / "out.obj").string();

@@ -23,7 +23,7 @@ struct ErrorTarget {
   bool percent = false;
 };
 
-ErrorTarget parse_error(const std::string& text) {
+ErrorTarget parse_error(const std::string& text, const char* option = "--error") {
   ErrorTarget t;
   std::string number = text;
   if (!number.empty() && number.back() == '%') {
@@ -33,7 +33,7 @@ ErrorTarget parse_error(const std::string& text) {
   char* end = nullptr;
   t.value = std::strtod(number.c_str(), &end);
   if (number.empty() || end != number.c_str() + number.size() || !std::isfinite(t.value) || t.value < 0)
-    throw CLI::ValidationError("--error", text + ": expected a non-negative number, optionally followed by % (of the bounding-box diagonal)");
+    throw CLI::ValidationError(option, text + ": expected a non-negative number, optionally followed by % (of the bounding-box diagonal)");
   return t;
 }
 
@@ -51,6 +51,30 @@ void add_distance(nlohmann::json& report, Globals& g, const Mesh& input, const M
   info(g, "Hausdorff distance " + std::to_string(d.hausdorff) + " (" + std::to_string(d.hausdorff * pct) + " % of the diagonal)");
 }
 
+// The regions of the output farther than `threshold` from the input (object units).
+void add_regions(nlohmann::json& report, Globals& g, const Mesh& input, const Mesh& out, double threshold, double diagonal) {
+  const std::vector<double> d = face_distances(input, out);
+  const std::vector<ErrorRegion> regions = error_regions(out, d, threshold);
+  const double pct = diagonal > 0 ? 100.0 / diagonal : 0.0;
+  size_t over = 0;
+  for (const ErrorRegion& r : regions) over += r.faces;
+  nlohmann::json list = nlohmann::json::array();
+  for (size_t i = 0; i < regions.size() && i < 100; ++i) {
+    const ErrorRegion& r = regions[i];
+    list.push_back({{"faces", r.faces},
+                    {"max_distance", r.max_distance},
+                    {"max_percent", r.max_distance * pct},
+                    {"area", r.area},
+                    {"centroid", {r.centroid[0], r.centroid[1], r.centroid[2]}},
+                    {"first_face", r.first_face}});
+  }
+  report["regions"] = {{"threshold", threshold}, {"count", regions.size()}, {"faces", over}, {"largest", list}};
+  if (!regions.empty())
+    warn(g, std::to_string(regions.size()) + " regions (" + std::to_string(over) + " faces) are farther than " + std::to_string(threshold) +
+                " from the input; the worst, " + std::to_string(regions[0].max_distance) + ", around face " +
+                std::to_string(regions[0].first_face) + " (see --json's regions)");
+}
+
 std::string joined(const std::vector<std::string>& names) {
   std::string s;
   for (const auto& n : names) s += (s.empty() ? "" : ", ") + ("'" + n + "'");
@@ -61,7 +85,7 @@ std::string joined(const std::vector<std::string>& names) {
 
 void add_meshreduce(CLI::App& app, Context& ctx) {
   struct Args {
-    std::string input, output, error, progressive, from_progressive;
+    std::string input, output, error, progressive, from_progressive, regions;
     size_t faces = 0;
     double ratio = 0;
     float max_normal_deviation = ReduceOptions{}.max_normal_deviation;
@@ -111,13 +135,18 @@ void add_meshreduce(CLI::App& app, Context& ctx) {
   from->excludes(lock_boundary);
   from->excludes(lock_group);
   sub->add_flag("--no-measure", args->no_measure, "Skip measuring the Hausdorff and RMS distance between input and output");
+  auto* regions = sub->add_option("--report-regions", args->regions,
+                                  "Report the regions of the output farther from the input than E (object units, or % of the "
+                                  "diagonal), both ways, as connected groups of faces (default with --error: its target)");
+  regions->excludes(from);
   sub->callback([&ctx, args, faces, ratio, error, from] {
     if (faces->count() + ratio->count() + error->count() != 1)
       throw CLI::ValidationError("meshreduce", "give exactly one target: --faces N, --ratio R or --error E");
     if (args->input.empty() && !from->count())
       throw CLI::ValidationError("meshreduce", "give an input mesh (or --from-progressive FILE)");
-    ErrorTarget error_target;
+    ErrorTarget error_target, regions_target;
     if (error->count()) error_target = parse_error(args->error);
+    if (!args->regions.empty()) regions_target = parse_error(args->regions, "--report-regions");
     if (from->count()) {
       ctx.run = [&ctx, args](nlohmann::json& report, Progress&) {
         if (!is_writable_mesh_extension(args->output))
@@ -159,7 +188,7 @@ void add_meshreduce(CLI::App& app, Context& ctx) {
       };
       return;
     }
-    ctx.run = [&ctx, args, error_target](nlohmann::json& report, Progress& progress) {
+    ctx.run = [&ctx, args, error_target, regions_target](nlohmann::json& report, Progress& progress) {
       if (!is_writable_mesh_extension(args->output)) throw UsageError(args->output + ": unknown mesh extension (use .obj, .ply, .gltf or .glb)");
       if (!args->progressive.empty() && std::filesystem::path(args->progressive) == std::filesystem::path(args->output))
         throw UsageError(args->progressive + ": --progressive and -o name the same file");
@@ -219,6 +248,10 @@ void add_meshreduce(CLI::App& app, Context& ctx) {
         report["tracked_error"] = r.tracked_error;
       }
       if (!args->no_measure) add_distance(report, ctx.globals, input, out, diagonal);
+      if (!args->regions.empty())
+        add_regions(report, ctx.globals, input, out, regions_target.percent ? regions_target.value * 0.01 * diagonal : regions_target.value, diagonal);
+      else if (by_error)
+        add_regions(report, ctx.globals, input, out, o.max_error, diagonal);
       return 0;
     };
   });

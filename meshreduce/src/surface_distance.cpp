@@ -144,4 +144,64 @@ SurfaceDistance measure_surface_distance(const TriangleSoup& a, const TriangleSo
   return d;
 }
 
+std::vector<double> face_distances(const Mesh& a, const Mesh& b, const SurfaceDistanceOptions& options) {
+  const TriangleSoup sa = triangle_soup(a), sb = triangle_soup(b);
+  const size_t n = options.samples ? options.samples
+                                   : std::clamp<size_t>(2 * std::max(sa.triangles.size(), sb.triangles.size()), 100000, 4000000);
+  const std::vector<Triangle> ta = triangles(sa);
+  // b's triangles, the degenerate ones included (they keep distance 0), in face order.
+  std::vector<Triangle> tb;
+  tb.reserve(sb.triangles.size());
+  for (const auto& t : sb.triangles) tb.emplace_back(point(sb.points[t[0]]), point(sb.points[t[1]]), point(sb.points[t[2]]));
+  std::vector<Triangle> tb_live;
+  std::vector<size_t> live_face;
+  for (size_t f = 0; f < tb.size(); ++f)
+    if (!tb[f].is_degenerate()) {
+      tb_live.push_back(tb[f]);
+      live_face.push_back(f);
+    }
+  std::vector<double> out(tb.size(), 0.0);
+  if (ta.empty() || tb_live.empty()) return out;
+  Tree tree_a(ta.begin(), ta.end()), tree_b(tb_live.begin(), tb_live.end());
+  tree_a.accelerate_distance_queries();
+  tree_b.accelerate_distance_queries();
+
+  // b's own samples, per face: corners, centroid, and points by area (fixed seed per face).
+  double total = 0;
+  for (const auto& t : tb_live) total += std::sqrt(t.squared_area());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, tb_live.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i) {
+      const Triangle& t = tb_live[i];
+      Random rng{options.seed + 0x51ED2701ull * (live_face[i] + 1)};
+      const size_t count = static_cast<size_t>(static_cast<double>(n) * std::sqrt(t.squared_area()) / total + rng.uniform());
+      double worst = 0;
+      auto at = [&](double wa, double wb, double wc) {
+        const Point p(wa * t[0].x() + wb * t[1].x() + wc * t[2].x(), wa * t[0].y() + wb * t[1].y() + wc * t[2].y(),
+                      wa * t[0].z() + wb * t[1].z() + wc * t[2].z());
+        worst = std::max(worst, CGAL::to_double(tree_a.squared_distance(p)));
+      };
+      at(1, 0, 0);
+      at(0, 1, 0);
+      at(0, 0, 1);
+      at(1.0 / 3, 1.0 / 3, 1.0 / 3);
+      for (size_t k = 0; k < count; ++k) {
+        const double r1 = std::sqrt(rng.uniform()), r2 = rng.uniform();
+        at(1 - r1, r1 * (1 - r2), r1 * r2);
+      }
+      out[live_face[i]] = std::sqrt(worst);
+    }
+  });
+  // a's samples, attributed to the face of b nearest to them.
+  const std::vector<Point> pa = sample(sa, ta, n, options.seed);
+  std::vector<std::pair<double, size_t>> nearest(pa.size());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, pa.size(), 2048), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i) {
+      const auto [q, id] = tree_b.closest_point_and_primitive(pa[i]);
+      nearest[i] = {std::sqrt(CGAL::to_double(CGAL::squared_distance(pa[i], q))), live_face[static_cast<size_t>(id - tb_live.cbegin())]};
+    }
+  });
+  for (const auto& [d, f] : nearest) out[f] = std::max(out[f], d);  // sequential: any thread count
+  return out;
+}
+
 }  // namespace meso

@@ -47,4 +47,22 @@ TriangleSoup triangle_soup(const Mesh& mesh);  // live faces; points = the mesh'
 SurfaceDistance measure_surface_distance(const Mesh& a, const Mesh& b, const SurfaceDistanceOptions& options = {});
 SurfaceDistance measure_surface_distance(const TriangleSoup& a, const TriangleSoup& b, const SurfaceDistanceOptions& options = {});
 
+// The same measure located on the faces of `b` (typically the reduced output), in b's face
+// order: per face, the largest distance of the samples attributed to it, both ways: its own
+// samples (corners, centroid, and points by area as above) measured to `a`, and the samples of
+// `a` whose closest point on `b` lies on it, measured to that point. Object units; 0 for a
+// degenerate face. Deterministic whatever the thread count.
+std::vector<double> face_distances(const Mesh& a, const Mesh& b, const SurfaceDistanceOptions& options = {});
+
+// Where b departs from a by more than `threshold` (object units): the faces of b whose
+// face_distances exceed it, grouped into edge-connected regions, largest maximum first.
+struct ErrorRegion {
+  size_t faces = 0;
+  double max_distance = 0;  // largest face distance in the region, object units
+  double area = 0;          // object units^2
+  Vec3f centroid{0, 0, 0};  // area-weighted
+  int first_face = 0;       // lowest face index of the region (b's face order)
+};
+std::vector<ErrorRegion> error_regions(const Mesh& b, const std::vector<double>& face_distance, double threshold);
+
 }  // namespace meso
