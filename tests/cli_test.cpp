@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 
 namespace meso {
 namespace {
@@ -72,6 +73,80 @@ TEST(Cli, UvpackPackMakesAUniqueMappingWithPadding) {
   const Result check = run("uvpack check " + (dir / "packed.obj").string() + " --size 128 --padding 3 --fail-on overlap,shared,padding,outside");
   EXPECT_EQ(check.code, 0) << check.err;
   // (A mesh without UVs is unwrapped first: Cli.UvpackPackUnwrapsAMeshWithoutUvs.)
+}
+
+// --mip-safe K on pack and check; --density moves texels to the chart whose map has detail.
+TEST(Cli, UvpackMipSafeAndDensity) {
+  test::TempDir dir;
+  write_mesh(test::make_seamed_cube(), dir / "cube.obj");
+  const std::string cube = (dir / "cube.obj").string();
+  const Result safe = run("uvpack pack " + cube + " -o " + (dir / "safe.obj").string() + " --size 256 --padding 2 --mip-safe 3 --json");
+  ASSERT_EQ(safe.code, 0) << safe.err;
+  const auto report = nlohmann::json::parse(safe.out);
+  EXPECT_EQ(report["mip_safe"], 3);
+  EXPECT_EQ(report["check"]["mip_violations"], 0);
+  EXPECT_GT(report["utilization"].get<double>(), 0.05);
+  EXPECT_GT(report["texel_coverage"].get<double>(), report["utilization"].get<double>());
+  const Result check = run("uvpack check " + (dir / "safe.obj").string() + " --size 256 --mip-safe 3 --fail-on mip,shared --report " +
+                           (dir / "r.json").string());
+  EXPECT_EQ(check.code, 0) << check.err;
+  std::ifstream in(dir / "r.json");
+  const auto r = nlohmann::json::parse(in);
+  EXPECT_EQ(r["mip_safe_levels"], 3);
+  EXPECT_TRUE(r["mip_violations"].empty());
+  // The plain packing at padding 2 is not mip-safe to level 3: --fail-on mip exits 1.
+  ASSERT_EQ(run("uvpack pack " + cube + " -o " + (dir / "plain.obj").string() + " --size 256 --padding 2").code, 0);
+  EXPECT_EQ(run("uvpack check " + (dir / "plain.obj").string() + " --size 256 --mip-safe 3 --fail-on mip").code, 1);
+  EXPECT_EQ(run("uvpack check " + cube + " --size 100 --mip-safe 3").code, 2) << "100 is not a multiple of 8";
+  EXPECT_EQ(run("uvpack pack " + cube + " -o " + (dir / "x.obj").string() + " --size 100 --mip-safe 3").code, 2);
+  EXPECT_EQ(run("uvpack check " + cube + " --size 64 --fail-on mip").code, 2) << "--fail-on mip needs --mip-safe";
+  EXPECT_EQ(run("uvpack pack " + cube + " -o " + (dir / "x.obj").string() + " --size 64 --padding 64").code, 2) << "no room inside the margin";
+  const Result crowded = run("uvpack pack " + cube + " -o " + (dir / "x.obj").string() + " --size 8 --padding 4");
+  EXPECT_EQ(crowded.code, 3) << "6 charts 5 texels apart cannot fit 8^2";
+  EXPECT_NE(crowded.err.find("cannot fit"), std::string::npos) << crowded.err;
+  EXPECT_FALSE(fs::exists(dir / "x.obj"));
+
+  // --density: a map with detail on the packed layout's first chart only (its UV box; the
+  // other charts lie 2 texels away or more, on a constant).
+  ASSERT_EQ(run("uvpack pack " + cube + " -o " + (dir / "layout.obj").string() + " --size 64 --padding 2").code, 0);
+  const Mesh layout = read_mesh(dir / "layout.obj");
+  size_t charts = 0;
+  const std::vector<int> chart = uv_charts(layout, &charts);
+  ASSERT_EQ(charts, 6u);
+  float u0 = 1, u1 = 0, v0 = 1, v1 = 0;
+  for (auto f : layout.faces())
+    if (chart[static_cast<size_t>(f.idx())] == chart[0])
+      for (auto h : face_halfedges(layout, f)) {
+        const Vec2f t = layout.texcoord2D(h);
+        u0 = std::min(u0, t[0]), u1 = std::max(u1, t[0]), v0 = std::min(v0, t[1]), v1 = std::max(v1, t[1]);
+      }
+  Image map(64, 64, 1, 0.5f);
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 64; ++x) {
+      const float u = (x + 0.5f) / 64, v = 1 - (y + 0.5f) / 64;
+      if (u >= u0 && u <= u1 && v >= v0 && v <= v1) map.at(x, y) = static_cast<float>((x * 7 + y * 13) % 5) / 5.0f;
+    }
+  write_image(map, dir / "detail.exr", PixelFormat::float32);
+  const Result dense = run("uvpack pack " + (dir / "layout.obj").string() + " -o " + (dir / "dense.obj").string() +
+                           " --size 64 --padding 2 --density " + (dir / "detail.exr").string() + " --json");
+  ASSERT_EQ(dense.code, 0) << dense.err;
+  const auto dr = nlohmann::json::parse(dense.out);
+  const auto& per_chart = dr["density"]["per_chart"];
+  ASSERT_EQ(per_chart.size(), 6u);
+  double detailed_gain = 0, other_gain = 0;
+  for (const auto& c : per_chart) {
+    const double gain = c["texels_after"].get<double>() / c["texels_before"].get<double>();
+    if (c["chart"] == chart[0]) {
+      EXPECT_EQ(c["scale"], 2.0) << "clamped growth";
+      detailed_gain = gain;
+    } else {
+      EXPECT_EQ(c["scale"], 0.5) << "clamped shrink";
+      other_gain = std::max(other_gain, gain);
+    }
+  }
+  EXPECT_NEAR(detailed_gain / other_gain, 16.0, 0.05) << "(2 / 0.5)^2 times the texels, relative to the flat charts";
+  EXPECT_EQ(run("uvpack check " + (dir / "dense.obj").string() + " --size 64 --padding 2 --fail-on overlap,shared,padding,outside").code, 0);
+  EXPECT_EQ(run("uvpack pack " + cube + " -o " + (dir / "x.obj").string() + " --density " + (dir / "missing.exr").string()).code, 2);
 }
 
 TEST(Cli, BadUsageExitsTwo) {

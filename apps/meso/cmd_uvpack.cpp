@@ -5,11 +5,13 @@
 #include "meso/formats/image_io.hpp"
 #include "meso/formats/mesh_io.hpp"
 #include "meso/uvpack/uv_check.hpp"
+#include "meso/uvpack/uv_density.hpp"
 #include "meso/uvpack/uv_pack.hpp"
 #include "meso/uvpack/uv_unwrap.hpp"
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <map>
 #include <stdexcept>
 
@@ -47,6 +49,15 @@ nlohmann::json unwrap_json(const UvUnwrapReport& r, const std::string& method, d
           {"seconds", seconds}};
 }
 
+// UV area per chart (uv_charts() order), in units of the unit square.
+std::vector<double> chart_uv_areas(const Mesh& mesh) {
+  size_t count = 0;
+  const std::vector<int> chart = uv_charts(mesh, &count);
+  std::vector<double> area(count, 0.0);
+  for (auto f : mesh.faces()) area[static_cast<size_t>(chart[static_cast<size_t>(f.idx())])] += 0.5 * std::abs(static_cast<double>(uv_double_area(mesh, f)));
+  return area;
+}
+
 }  // namespace
 
 void add_uvpack(CLI::App& app, Context& ctx) {
@@ -56,6 +67,7 @@ void add_uvpack(CLI::App& app, Context& ctx) {
     std::string input, overlay, report;
     int size = 1024;
     double padding = 0;
+    int mip_safe = -1;
     std::vector<std::string> fail_on;
   };
   auto args = std::make_shared<Args>();
@@ -64,11 +76,15 @@ void add_uvpack(CLI::App& app, Context& ctx) {
   check->add_option("--size", args->size, "Texture size in texels per side")->check(CLI::Range(1, 32768));
   check->add_option("--padding", args->padding, "Texels charts must keep between them (0: not checked)")
       ->check(CLI::NonNegativeNumber & Finite);
+  check->add_option("--mip-safe", args->mip_safe,
+                    "Also check that no texel of MIP levels 0..K that a chart's bilinear lookups read holds another chart's values "
+                    "(after the bake's dilation; box-filtered levels; --size a multiple of 2^K)")
+      ->check(CLI::Range(0, 14));
   check->add_option("-o,--overlay", args->overlay, "Overlay PNG (RGBA): red = shared texels, blue = used once");
   check->add_option("--report", args->report, "JSON report file");
-  check->add_option("--fail-on", args->fail_on, "Exit 1 when any of these is found: overlap,shared,flipped,degenerate,outside,padding")
+  check->add_option("--fail-on", args->fail_on, "Exit 1 when any of these is found: overlap,shared,flipped,degenerate,outside,padding,mip")
       ->delimiter(',')
-      ->check(CLI::IsMember({"overlap", "shared", "flipped", "degenerate", "outside", "padding"}));
+      ->check(CLI::IsMember({"overlap", "shared", "flipped", "degenerate", "outside", "padding", "mip"}));
   check->callback([&ctx, args] {
     ctx.run = [&ctx, args](nlohmann::json& report, Progress&) {
       nlohmann::json in_report;
@@ -78,6 +94,11 @@ void add_uvpack(CLI::App& app, Context& ctx) {
       o.size = args->size;
       o.padding = args->padding;
       o.overlay = !args->overlay.empty();
+      o.mip_safe = args->mip_safe;
+      if (o.mip_safe >= 0 && o.size % (1 << o.mip_safe) != 0)
+        throw UsageError("--mip-safe " + std::to_string(o.mip_safe) + " needs --size to be a multiple of " + std::to_string(1 << o.mip_safe));
+      if (o.mip_safe < 0 && std::find(args->fail_on.begin(), args->fail_on.end(), "mip") != args->fail_on.end())
+        throw UsageError("--fail-on mip needs --mip-safe K");
       const UvCheckReport r = check_uv_mapping(mesh, o);
       nlohmann::json gaps = nlohmann::json::array();
       for (const auto& g : r.padding_violations) gaps.push_back({{"charts", {g.chart_a, g.chart_b}}, {"distance", g.distance}});
@@ -96,7 +117,15 @@ void add_uvpack(CLI::App& app, Context& ctx) {
                 {"texel_density", density_json(r.texel_density)},
                 {"texels_touched", r.texels_touched},
                 {"texels_shared", r.texels_shared},
-                {"utilization", r.utilization}};
+                {"utilization", r.utilization},
+                {"texel_coverage", r.texel_coverage}};
+      if (o.mip_safe >= 0) {
+        nlohmann::json mips = nlohmann::json::array();
+        for (const auto& m : r.mip_violations) mips.push_back({{"level", m.level}, {"chart", m.chart}, {"reads", m.reads}, {"texels", m.texels}});
+        report["mip_safe"] = o.mip_safe;
+        report["mip_safe_levels"] = r.mip_safe_levels;
+        report["mip_violations"] = mips;
+      }
       OutputSet outputs;
       if (!args->overlay.empty()) write_image(r.overlay, outputs.add(args->overlay), PixelFormat::uint8);
       if (!args->report.empty()) outputs.write_text(args->report, report.dump(2) + "\n");
@@ -109,7 +138,8 @@ void add_uvpack(CLI::App& app, Context& ctx) {
                                                  {"flipped", !r.flipped_faces.empty()},
                                                  {"degenerate", !r.degenerate_faces.empty()},
                                                  {"outside", !r.outside_faces.empty()},
-                                                 {"padding", !r.padding_violations.empty()}};
+                                                 {"padding", !r.padding_violations.empty()},
+                                                 {"mip", !r.mip_violations.empty()}};
       for (const auto& what : args->fail_on) {
         if (found.at(what)) {
           warn(ctx.globals, args->input + ": --fail-on " + what + ": found");
@@ -128,6 +158,9 @@ void add_uvpack(CLI::App& app, Context& ctx) {
     bool unwrap = false;
     std::string unwrap_method = "lscm";
     UvUnwrapOptions unwrap_options;
+    std::string density;
+    double density_clamp = 2.0;
+    std::string quality = "balanced";
   };
   auto pack_args = std::make_shared<PackArgs>();
   CLI::App* pack = uv->add_subcommand("pack", "Pack the mesh's UV charts into a square atlas with padding (one common scale, 90-degree turns)");
@@ -136,6 +169,21 @@ void add_uvpack(CLI::App& app, Context& ctx) {
   pack->add_option("--size", pack_args->options.size, "Atlas size in texels per side")->check(CLI::Range(1, 16384))->capture_default_str();
   pack->add_option("--padding", pack_args->options.padding, "Texels between charts (half of it to the border)")->check(CLI::Range(0, 256))->capture_default_str();
   pack->add_flag("--no-rotate", pack_args->no_rotate, "Keep every chart's orientation");
+  pack->add_option("--quality", pack_args->quality,
+                   "Search effort: fast (2 orientations, scale within 4 %), balanced (4 orientations, 1 %), best (also 3 chart orders, 0.25 %)")
+      ->check(CLI::IsMember({"fast", "balanced", "best"}))
+      ->capture_default_str();
+  pack->add_option("--mip-safe", pack_args->options.mip_safe,
+                   "Keep charts apart so that no texel of MIP levels 0..K their bilinear lookups read holds another chart's values "
+                   "(box-filtered levels of a map dilated as meso bake does; about 4 * 2^K texels between charts; --size a multiple of 2^K)")
+      ->check(CLI::Range(0, 14));
+  pack->add_option("--density", pack_args->density,
+                   "A map in the mesh's current UV layout (e.g. a first bake's displacement or normal map): charts are scaled by the "
+                   "detail it holds (RMS gradient), within --density-clamp, so detailed charts get more texels")
+      ->check(CLI::ExistingFile);
+  pack->add_option("--density-clamp", pack_args->density_clamp, "Largest growth or shrink of a chart's linear scale by --density")
+      ->check(CLI::Range(1.0, 16.0) & Finite)
+      ->capture_default_str();
   pack->add_flag("--unwrap", pack_args->unwrap, "Make new charts (normal-cone charts flattened by LSCM or ARAP) instead of the mesh's UVs; implied when it has none");
   pack->add_option("--unwrap-method", pack_args->unwrap_method, "Flattening: lscm (conformal, fast) or arap (as-rigid-as-possible)")
       ->check(CLI::IsMember({"lscm", "arap"}))
@@ -169,6 +217,21 @@ void add_uvpack(CLI::App& app, Context& ctx) {
       }
       UvPackOptions o = pack_args->options;
       o.rotate = !pack_args->no_rotate;
+      o.quality = pack_args->quality == "fast" ? PackQuality::fast : pack_args->quality == "best" ? PackQuality::best : PackQuality::balanced;
+      std::vector<ChartDetail> detail;
+      std::vector<double> area_before;
+      if (!pack_args->density.empty()) {
+        if (!unwrap_report.is_null()) throw UsageError("--density measures the mesh's own UV layout; it cannot be used with --unwrap or a mesh without UVs");
+        const Image map = read_image(pack_args->density);
+        if (map.empty()) throw InputError(pack_args->density, "is an empty image");
+        detail = measure_chart_detail(mesh, map, pack_args->density_clamp);
+        for (const auto& d : detail) o.chart_scale.push_back(d.scale);
+        area_before = chart_uv_areas(mesh);
+      }
+      if (o.mip_safe >= 0 && o.size % (1 << o.mip_safe) != 0)
+        throw UsageError("--mip-safe " + std::to_string(o.mip_safe) + " needs --size to be a multiple of " + std::to_string(1 << o.mip_safe));
+      if (2 * ((o.padding + 1) / 2) >= o.size)
+        throw UsageError("--padding " + std::to_string(o.padding) + " leaves no texel inside a " + std::to_string(o.size) + "-texel atlas");
       UvPackReport r;
       const auto pack_start = std::chrono::steady_clock::now();
       try {
@@ -182,6 +245,7 @@ void add_uvpack(CLI::App& app, Context& ctx) {
       verify.size = o.size;
       verify.padding = o.padding;
       verify.overlay = false;
+      verify.mip_safe = o.mip_safe;
       const UvCheckReport c = check_uv_mapping(mesh, verify);
       OutputSet outputs;
       write_mesh(mesh, outputs.add(pack_args->output));
@@ -193,9 +257,11 @@ void add_uvpack(CLI::App& app, Context& ctx) {
                 {"size", o.size},
                 {"padding", o.padding},
                 {"rotate", o.rotate},
+                {"quality", pack_args->quality},
                 {"charts", r.charts},
                 {"scale", r.scale},
                 {"utilization", r.utilization},
+                {"texel_coverage", r.texel_coverage},
                 {"attempts", r.attempts},
                 {"seconds", pack_seconds},
                 {"check", {{"overlapping_faces", c.overlapping_faces.size()},
@@ -203,7 +269,23 @@ void add_uvpack(CLI::App& app, Context& ctx) {
                            {"padding_violations", c.padding_violations.size()},
                            {"outside_faces", c.outside_faces.size()},
                            {"flipped_faces", c.flipped_faces.size()}}}};
+      if (o.mip_safe >= 0) {
+        report["mip_safe"] = o.mip_safe;
+        report["check"]["mip_violations"] = c.mip_violations.size();
+      }
       if (!unwrap_report.is_null()) report["unwrap"] = unwrap_report;
+      if (!detail.empty()) {
+        const std::vector<double> area_after = chart_uv_areas(mesh);
+        const double texels = static_cast<double>(o.size) * o.size;
+        nlohmann::json per_chart = nlohmann::json::array();
+        for (size_t k = 0; k < detail.size(); ++k)
+          per_chart.push_back({{"chart", detail[k].chart},
+                               {"detail", detail[k].detail},
+                               {"scale", detail[k].scale},
+                               {"texels_before", area_before[k] * texels},
+                               {"texels_after", area_after[k] * texels}});
+        report["density"] = {{"map", pack_args->density}, {"clamp", pack_args->density_clamp}, {"per_chart", per_chart}};
+      }
       return 0;
     };
   });

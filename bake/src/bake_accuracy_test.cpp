@@ -5,11 +5,13 @@
 //    reproduces the analytic normals of the high surface;
 //  - padding across MIP levels: after the bake's dilation, box-filtered levels
 //    0..floor(log2(P/2 + 1)) of an atlas packed with padding P never mix two charts in a texel
-//    a chart reads.
+//    a chart reads; with uvpack's --mip-safe K, levels 0..K never mix in a texel a chart's
+//    bilinear lookups read, and uv_check predicts exactly which texels mix.
 #include "meso/bake/bake.hpp"
 #include "meso/bake/tangent_frame.hpp"
 #include "meso/bake/uv_raster.hpp"
 #include "meso/formats/image_io.hpp"
+#include "meso/uvpack/uv_check.hpp"
 #include "meso/uvpack/uv_pack.hpp"
 #include "test_support.hpp"
 
@@ -19,6 +21,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <set>
+#include <tuple>
 #include <vector>
 
 namespace meso {
@@ -314,7 +318,7 @@ Mesh make_patches(int count, std::vector<Eigen::Vector3d>& normals, double grow 
 // a footprint may reach 2^k - 1 texels past C's last texel only while 2^k - 1 <= P / 2:
 // levels k <= floor(log2(P/2 + 1)) (P = 2, 4: levels 0-1; P = 8: 0-2; measured: the next level
 // mixes, 186 of 3,339 read texels at P = 4). Level log2(P), as the issue asks, needs charts 2P
-// apart (uvpack --mip-safe, not done). Chart ids come from rasterising the UVs (rasterize_uv's
+// apart (uvpack --mip-safe, the next test). Chart ids come from rasterising the UVs (rasterize_uv's
 // faces, uv_charts).
 TEST(BakeAccuracy, DilatedPaddingKeepsChartsApartDownToMipLevelLog2OfHalfPPlusOne) {
   std::vector<Eigen::Vector3d> normals;
@@ -404,6 +408,91 @@ TEST(BakeAccuracy, DilatedPaddingKeepsChartsApartDownToMipLevelLog2OfHalfPPlusOn
       ++levels_checked;
     }
     EXPECT_EQ(levels_checked, static_cast<int>(std::floor(std::log2(padding / 2 + 1))) + 1);
+  }
+}
+
+// uvpack --mip-safe K, end to end through the real bake: an atlas of 24 charts packed with
+// mip_safe K, baked with the bake's dilation over the whole map, box-filtered as above. At every
+// level k <= K, each texel a bilinear lookup inside chart C reads (the level-k texels within one
+// of a level-k texel C touches) holds C's values alone. And uv_check's mip check, which predicts
+// the dilation from the UVs alone, finds exactly the texels that mix in the real maps, at every
+// level, for the mip-safe atlas (none) and for a plain padding-2 atlas (some from level 1 on).
+TEST(BakeAccuracy, MipSafePackingKeepsBilinearReadsApartAndTheCheckerPredictsTheMixing) {
+  std::vector<Eigen::Vector3d> normals;
+  const Mesh patches = make_patches(24, normals);
+  const Mesh high = make_patches(24, normals, 0.05);
+  size_t charts = 0;
+  const std::vector<int> face_chart = uv_charts(patches, &charts);
+  const int n = 256, levels = 3;
+  for (const int mip_safe : {3, -1}) {
+    SCOPED_TRACE("mip_safe " + std::to_string(mip_safe));
+    Mesh mesh = patches;
+    UvPackOptions po;
+    po.size = n;
+    po.padding = 2;
+    po.mip_safe = mip_safe;
+    pack_uv_charts(mesh, po);
+    BakeOptions o;
+    o.width = o.height = n;
+    o.front = o.back = 0.05f;
+    o.dilate = -1;
+    const BakeResult r = bake(mesh, high, o);
+    ASSERT_EQ(r.misses, 0u);
+    // Per level-0 texel: the chart whose value it holds (by its normal) and the chart touching it.
+    std::vector<int> source(static_cast<size_t>(n) * n, -1), touched(source.size(), -1);
+    for (size_t i = 0; i < source.size(); ++i) {
+      const Eigen::Vector3d v(r.normal_os.pixels[3 * i], r.normal_os.pixels[3 * i + 1], r.normal_os.pixels[3 * i + 2]);
+      for (size_t c = 0; c < normals.size(); ++c)
+        if (v.dot(normals[c]) > 0.9999) source[i] = static_cast<int>(c);
+      ASSERT_GE(source[i], 0);
+    }
+    const auto samples = rasterize_uv(mesh, n, n);
+    for (size_t i = 0; i < samples.size(); ++i)
+      if (samples[i].face >= 0) touched[i] = face_chart[static_cast<size_t>(samples[i].face)];
+    UvCheckOptions co;
+    co.size = n;
+    co.overlay = false;
+    co.mip_safe = levels;
+    const UvCheckReport check = check_uv_mapping(mesh, co);
+    size_t mixed_total = 0;
+    for (int k = 0, b = 1; k <= levels; ++k, b *= 2) {
+      const int cn = n / b;
+      // The charts whose values each level-k texel averages, and the charts touching it.
+      std::vector<std::set<int>> holds(static_cast<size_t>(cn) * cn), readers(holds.size());
+      for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+          const size_t i = static_cast<size_t>(y) * n + static_cast<size_t>(x), ci = static_cast<size_t>(y / b) * cn + static_cast<size_t>(x / b);
+          holds[ci].insert(source[i]);
+          if (touched[i] >= 0) readers[ci].insert(touched[i]);
+        }
+      std::set<std::tuple<size_t, int, int>> mixes;  // (level-k texel, reading chart, other chart)
+      for (int cy = 0; cy < cn; ++cy)
+        for (int cx = 0; cx < cn; ++cx)
+          for (int reader : readers[static_cast<size_t>(cy) * cn + static_cast<size_t>(cx)])
+            for (int ny = std::max(0, cy - 1); ny <= std::min(cn - 1, cy + 1); ++ny)
+              for (int nx = std::max(0, cx - 1); nx <= std::min(cn - 1, cx + 1); ++nx) {
+                const size_t ni = static_cast<size_t>(ny) * cn + static_cast<size_t>(nx);
+                for (int other : holds[ni])
+                  if (other != reader) mixes.insert({ni, reader, other});
+              }
+      size_t predicted = 0;
+      for (const auto& v : check.mip_violations)
+        if (v.level == k) predicted += v.texels;
+      std::printf("[ mip-safe ] mip_safe %d, level %d: %zu (texel, chart, other chart) mixes in the baked maps, %zu predicted\n", mip_safe, k,
+                  mixes.size(), predicted);
+      EXPECT_EQ(predicted, mixes.size()) << "level " << k;
+      if (mip_safe >= k) {
+        EXPECT_TRUE(mixes.empty()) << "level " << k;
+      }
+      mixed_total += mixes.size();
+    }
+    if (mip_safe >= 0) {
+      EXPECT_TRUE(check.mip_violations.empty());
+      EXPECT_EQ(check.mip_safe_levels, levels);
+    } else {
+      EXPECT_GT(mixed_total, 0u) << "padding 2 alone is not mip-safe to level 3: the test would prove nothing";
+      EXPECT_LT(check.mip_safe_levels, levels);
+    }
   }
 }
 

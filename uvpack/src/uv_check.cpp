@@ -1,13 +1,109 @@
 #include "meso/uvpack/uv_check.hpp"
 
+#include "meso/core/dilation_sources.hpp"
 #include "meso/core/uv_texels.hpp"
 
 #include <algorithm>
 #include <utility>
 #include <cmath>
+#include <map>
 #include <numeric>
+#include <stdexcept>
+#include <string>
+#include <tuple>
 
 namespace meso {
+
+namespace {
+
+// The mip-safety check of uv_check.hpp on the touched texels' charts (`touch`: the first
+// chart touching each texel, -1 for none; a texel two charts touch is already reported as
+// shared, and fails here too since its neighbours read both).
+void check_mip_levels(const std::vector<int>& touch, int size, int levels, UvCheckReport& r) {
+  if (levels > 14 || size % (1 << levels) != 0)
+    throw std::invalid_argument("mip_safe " + std::to_string(levels) + " needs a size that is a multiple of 2^" + std::to_string(levels));
+  const size_t n = static_cast<size_t>(size) * static_cast<size_t>(size);
+  std::vector<uint8_t> written(n);
+  for (size_t i = 0; i < n; ++i) written[i] = touch[i] >= 0;
+  const std::vector<int32_t> source = dilation_sources(written, size, size, -1);
+  std::vector<int> owner(n, -1);  // the chart whose value each texel holds after dilation
+  for (size_t i = 0; i < n; ++i)
+    if (source[i] >= 0) owner[i] = touch[static_cast<size_t>(source[i])];
+  constexpr int kMixed = -2;
+  std::map<std::tuple<int, int, int>, size_t> found;  // (level, chart, reads) -> texels
+  r.mip_safe_levels = levels;
+  for (int k = 0; k <= levels; ++k) {
+    const int b = 1 << k, cn = size >> k;
+    // Per level-k texel: the one chart whose values it holds (kMixed: several, -1: none), and
+    // the one chart touching it (kMixed: several, -1: none).
+    std::vector<int> holds(static_cast<size_t>(cn) * static_cast<size_t>(cn)), touched(holds.size());
+    for (int cy = 0; cy < cn; ++cy)
+      for (int cx = 0; cx < cn; ++cx) {
+        int h = owner[static_cast<size_t>(cy * b) * static_cast<size_t>(size) + static_cast<size_t>(cx * b)], t = -1;
+        for (int y = cy * b; y < (cy + 1) * b; ++y)
+          for (int x = cx * b; x < (cx + 1) * b; ++x) {
+            const size_t i = static_cast<size_t>(y) * static_cast<size_t>(size) + static_cast<size_t>(x);
+            if (owner[i] != h) h = kMixed;
+            if (touch[i] >= 0) t = (t == -1 || t == touch[i]) ? touch[i] : kMixed;
+          }
+        holds[static_cast<size_t>(cy) * static_cast<size_t>(cn) + static_cast<size_t>(cx)] = h;
+        touched[static_cast<size_t>(cy) * static_cast<size_t>(cn) + static_cast<size_t>(cx)] = t;
+      }
+    // Which charts a mixed level-k texel holds, in increasing order.
+    auto charts_in = [&](int cx, int cy) {
+      std::vector<int> cs;
+      for (int y = cy * b; y < (cy + 1) * b; ++y)
+        for (int x = cx * b; x < (cx + 1) * b; ++x) {
+          const int c = owner[static_cast<size_t>(y) * static_cast<size_t>(size) + static_cast<size_t>(x)];
+          if (c >= 0) cs.push_back(c);
+        }
+      std::sort(cs.begin(), cs.end());
+      cs.erase(std::unique(cs.begin(), cs.end()), cs.end());
+      return cs;
+    };
+    bool clean = true;
+    // Each level-k texel a reader reaches counts once per (chart, reads), however many
+    // touched texels reach it: collect (texel, chart, reads) first.
+    std::vector<std::tuple<size_t, int, int>> hits;
+    for (int cy = 0; cy < cn; ++cy)
+      for (int cx = 0; cx < cn; ++cx) {
+        const int t = touched[static_cast<size_t>(cy) * static_cast<size_t>(cn) + static_cast<size_t>(cx)];
+        if (t == -1) continue;
+        std::vector<int> readers{t};
+        if (t == kMixed) {
+          // Several charts touch it: each of them reads its neighbourhood.
+          readers.clear();
+          for (int y = cy * b; y < (cy + 1) * b; ++y)
+            for (int x = cx * b; x < (cx + 1) * b; ++x) {
+              const int c = touch[static_cast<size_t>(y) * static_cast<size_t>(size) + static_cast<size_t>(x)];
+              if (c >= 0) readers.push_back(c);
+            }
+          std::sort(readers.begin(), readers.end());
+          readers.erase(std::unique(readers.begin(), readers.end()), readers.end());
+        }
+        for (int ny = std::max(0, cy - 1); ny <= std::min(cn - 1, cy + 1); ++ny)
+          for (int nx = std::max(0, cx - 1); nx <= std::min(cn - 1, cx + 1); ++nx) {
+            const size_t ni = static_cast<size_t>(ny) * static_cast<size_t>(cn) + static_cast<size_t>(nx);
+            const int h = holds[ni];
+            for (int reader : readers) {
+              if (h == reader) continue;
+              for (int other : h == kMixed ? charts_in(nx, ny) : std::vector<int>{h})
+                if (other >= 0 && other != reader) hits.emplace_back(ni, reader, other);
+            }
+          }
+      }
+    std::sort(hits.begin(), hits.end());
+    hits.erase(std::unique(hits.begin(), hits.end()), hits.end());
+    for (const auto& [texel, chart, reads] : hits) {
+      ++found[{k, chart, reads}];
+      clean = false;
+    }
+    if (!clean && r.mip_safe_levels == levels) r.mip_safe_levels = k - 1;
+  }
+  for (const auto& [key, texels] : found) r.mip_violations.push_back({std::get<0>(key), std::get<1>(key), std::get<2>(key), texels});
+}
+
+}  // namespace
 
 UvCheckReport check_uv_mapping(const Mesh& mesh, const UvCheckOptions& o) {
   UvCheckReport r;
@@ -92,7 +188,11 @@ UvCheckReport check_uv_mapping(const Mesh& mesh, const UvCheckOptions& o) {
       px[3] = 0.35f;
     }
   }
-  r.utilization = n ? static_cast<double>(r.texels_touched) / static_cast<double>(n) : 0.0;
+  r.texel_coverage = n ? static_cast<double>(r.texels_touched) / static_cast<double>(n) : 0.0;
+  double all_uv_area = 0;
+  for (double a : uv_area) all_uv_area += a;
+  r.utilization = n ? all_uv_area / static_cast<double>(n) : 0.0;
+  if (o.mip_safe >= 0) check_mip_levels(first_chart, o.size, o.mip_safe, r);
   return r;
 }
 

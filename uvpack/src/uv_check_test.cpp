@@ -4,7 +4,10 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
+#include <tuple>
+#include <vector>
 
 namespace meso {
 namespace {
@@ -167,6 +170,63 @@ TEST(UvCheck, ReportsDegenerateAndOutsideFaces) {
   const UvCheckReport r = check_uv_mapping(m, o);
   EXPECT_EQ(r.degenerate_faces, (std::vector<int>{1}));
   EXPECT_EQ(r.outside_faces, (std::vector<int>{3}));
+}
+
+// Axis-aligned UV quads, each its own chart: [x0, x1) x [y0, y1) in texels of a size^2 texture
+// (rows from the top), so exactly those texels are touched.
+Mesh texel_quads(const std::vector<std::array<int, 4>>& boxes, int size) {
+  Mesh m;
+  m.request_halfedge_texcoords2D();
+  float z = 0;
+  for (const auto& b : boxes) {
+    const float u0 = static_cast<float>(b[0]) / size, u1 = static_cast<float>(b[1]) / size;
+    const float v0 = 1.0f - static_cast<float>(b[3]) / size, v1 = 1.0f - static_cast<float>(b[2]) / size;
+    const VertexHandle p = m.add_vertex(Vec3f(u0, v0, z)), q = m.add_vertex(Vec3f(u1, v0, z)), r = m.add_vertex(Vec3f(u1, v1, z)),
+                       s = m.add_vertex(Vec3f(u0, v1, z));
+    for (const auto& tri : {std::array<VertexHandle, 3>{p, q, r}, std::array<VertexHandle, 3>{p, r, s}}) {
+      const FaceHandle f = m.add_face(tri[0], tri[1], tri[2]);
+      for (auto h : face_halfedges(m, f)) {
+        const Vec3f x = m.point(m.to_vertex_handle(h));
+        m.set_texcoord2D(h, Vec2f(x[0], x[1]));
+      }
+    }
+    z += 1;
+  }
+  compute_angle_weighted_normals(m);
+  return m;
+}
+
+// Two 8 x 8-texel charts, 2 texels apart in x, at 64^2, worked by hand. Level 0: the gap's
+// texels go to the nearer chart (16 to A, 17 to B), so bilinear reads (A: columns 7-16, B:
+// 17-26) are clean. Level 1: the 2 x 2 texel at columns 16-17 holds both, and both charts
+// read it (A's last level-1 column is 7, B's first 9) in level-1 rows 3-8 (the charts' rows
+// 4-7 and one more either side): 6 texels each way, nothing else.
+TEST(UvCheck, MipCheckOfTwoChartsTwoTexelsApart) {
+  const Mesh m = texel_quads({{8, 16, 8, 16}, {18, 26, 8, 16}}, 64);
+  UvCheckOptions o;
+  o.size = 64;
+  o.overlay = false;
+  o.mip_safe = 2;
+  const UvCheckReport r = check_uv_mapping(m, o);
+  ASSERT_EQ(r.charts, 2u);
+  EXPECT_EQ(r.texels_touched, 128u);
+  EXPECT_NEAR(r.utilization, 128.0 / 4096, 1e-9);
+  EXPECT_EQ(r.texel_coverage, 128.0 / 4096);
+  EXPECT_EQ(r.mip_safe_levels, 0);
+  std::vector<std::tuple<int, int, int, size_t>> got;
+  for (const auto& v : r.mip_violations)
+    if (v.level == 1) got.emplace_back(v.level, v.chart, v.reads, v.texels);
+  EXPECT_EQ(got, (std::vector<std::tuple<int, int, int, size_t>>{{1, 0, 1, 6}, {1, 1, 0, 6}}));
+  // 4 apart in x (B at 20-27): level 1 is clean too (16-17 go to A, 18-19 to B), level 2's
+  // texel of columns 16-19 mixes.
+  const UvCheckReport wider = check_uv_mapping(texel_quads({{8, 16, 8, 16}, {20, 28, 8, 16}}, 64), o);
+  EXPECT_EQ(wider.mip_safe_levels, 1);
+  for (const auto& v : wider.mip_violations) EXPECT_EQ(v.level, 2);
+  // Touching charts fail at level 0 already.
+  const UvCheckReport touching = check_uv_mapping(texel_quads({{8, 16, 8, 16}, {16, 24, 8, 16}}, 64), o);
+  EXPECT_EQ(touching.mip_safe_levels, -1);
+  ASSERT_FALSE(touching.mip_violations.empty());
+  EXPECT_EQ(touching.mip_violations.front().level, 0);
 }
 
 }  // namespace

@@ -2,11 +2,15 @@
 
 #include "meso/core/uv_texels.hpp"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace meso {
@@ -20,6 +24,7 @@ struct Chart {
   std::vector<std::array<double, 6>> tris;  // q of the three corners, face_halfedges() order
   double x0 = 0, y0 = 0, w = 0, h = 0;      // bounding box
   double area = 0;
+  double factor = 1;                        // options.chart_scale
 };
 
 // Corner q rotated by r quarter turns inside the chart's box, measured from its new corner.
@@ -40,6 +45,7 @@ constexpr double kInset = 1.0 / 64;
 // The texels a chart touches at scale s and orientation r, relative to its box's corner
 // placed at kInset past texel (0, 0)'s corner: conservative, as uv_check rasterises.
 std::vector<std::array<int, 2>> footprint(const Chart& c, double s, int r, int& bw, int& bh) {
+  s *= c.factor;
   const double w = (r & 1) ? c.h : c.w, h = (r & 1) ? c.w : c.h;
   bw = static_cast<int>(std::floor(w * s + kInset)) + 1;
   bh = static_cast<int>(std::floor(h * s + kInset)) + 1;
@@ -67,10 +73,49 @@ struct Placement {
   int orientation = 0, x = 0, y = 0;
 };
 
+// A chart's footprint in one orientation: its texels as runs of consecutive texels per row
+// (row, first, last) relative to its box corner, the box size and the texel count.
+struct Footprint {
+  std::vector<std::array<int, 3>> runs;
+  int bw = 0, bh = 0;
+  size_t texels = 0;
+};
+
+// Every chart's footprints at scale s, computed in parallel (each chart on its own: the
+// result does not depend on the split).
+std::vector<std::array<Footprint, 4>> footprints_at(const std::vector<Chart>& charts, double s, int orientations) {
+  std::vector<std::array<Footprint, 4>> out(charts.size());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, charts.size()), [&](const tbb::blocked_range<size_t>& range) {
+    for (size_t c = range.begin(); c < range.end(); ++c)
+      for (int r = 0; r < orientations; ++r) {
+        Footprint& f = out[c][static_cast<size_t>(r)];
+        const auto texels = footprint(charts[c], s, r, f.bw, f.bh);
+        f.texels = texels.size();
+        // Texels come row by row, left to right.
+        for (const auto& t : texels) {
+          if (!f.runs.empty() && f.runs.back()[0] == t[1] && f.runs.back()[2] + 1 == t[0]) f.runs.back()[2] = t[0];
+          else f.runs.push_back({t[1], t[0], t[0]});
+        }
+      }
+  });
+  return out;
+}
+
 // Greedy placement at scale s; false when some chart finds no room.
-bool place_all(const std::vector<Chart>& charts, const std::vector<size_t>& order, double s, const UvPackOptions& o,
+bool place_all(const std::vector<Chart>& charts, const std::vector<size_t>& order, double s, const UvPackOptions& o, int orientations,
                std::vector<Placement>& where, size_t& touched) {
-  const int n = o.size, pad = std::max(0, o.padding), margin = (pad + 1) / 2;
+  const int n = o.size, pad = o.mip_safe >= 0 ? std::max(2, o.padding) : std::max(0, o.padding), margin = (std::max(0, o.padding) + 1) / 2;
+  const std::vector<std::array<Footprint, 4>> prints = footprints_at(charts, s, orientations);
+  // A packing cannot succeed when the charts' texels (each in its smallest orientation)
+  // exceed the texels inside the margin: fail before placing anything.
+  size_t need = 0;
+  for (const auto& f : prints) {
+    size_t least = f[0].texels;
+    for (int r = 1; r < orientations; ++r) least = std::min(least, f[static_cast<size_t>(r)].texels);
+    need += least;
+  }
+  const size_t inside = static_cast<size_t>(std::max(0, n - 2 * margin)) * static_cast<size_t>(std::max(0, n - 2 * margin));
+  if (need > inside) return false;
   // Texels within `pad` of a placed chart's texel (Chebyshev): a new chart's texels must
   // avoid them. next_free[row * n + col]: the first unblocked column >= col in the row (n
   // if none), so a scan jumps over blocked runs instead of stepping through them.
@@ -95,17 +140,10 @@ bool place_all(const std::vector<Chart>& charts, const std::vector<size_t>& orde
   for (size_t c : order) {
     bool found = false;
     Placement best;
-    std::vector<std::array<int, 2>> best_texels;
-    for (int r = 0; r < (o.rotate ? 4 : 1); ++r) {
-      int bw = 0, bh = 0;
-      const auto texels = footprint(charts[c], s, r, bw, bh);
-      // The footprint as runs of consecutive texels per row (row, first, last): texels come
-      // row by row, left to right.
-      std::vector<std::array<int, 3>> runs;
-      for (const auto& t : texels) {
-        if (!runs.empty() && runs.back()[0] == t[1] && runs.back()[2] + 1 == t[0]) runs.back()[2] = t[0];
-        else runs.push_back({t[1], t[0], t[0]});
-      }
+    for (int r = 0; r < orientations; ++r) {
+      const Footprint& fp = prints[c][static_cast<size_t>(r)];
+      const int bw = fp.bw, bh = fp.bh;
+      const auto& runs = fp.runs;
       // This orientation's first fit in scan order (lowest row, then leftmost), searched no
       // lower than the best so far.
       bool here = false;
@@ -126,7 +164,6 @@ bool place_all(const std::vector<Chart>& charts, const std::vector<size_t>& orde
             here = true;
             if (!found || y < best.y || (y == best.y && x < best.x)) {
               best = {r, x, y};
-              best_texels = texels;
               found = true;
             }
             break;
@@ -137,14 +174,58 @@ bool place_all(const std::vector<Chart>& charts, const std::vector<size_t>& orde
     }
     if (!found) return false;
     where[c] = best;
-    touched += best_texels.size();
+    const Footprint& placed = prints[c][static_cast<size_t>(best.orientation)];
+    touched += placed.texels;
+    // The placed texels, as (x, y) in the atlas.
+    std::vector<std::array<int, 2>> best_texels;
+    best_texels.reserve(placed.texels);
+    for (const auto& run : placed.runs)
+      for (int x = run[1]; x <= run[2]; ++x) best_texels.push_back({best.x + x, best.y + run[0]});
     int row0 = n, row1 = -1;
-    for (const auto& t : best_texels) {
-      const int tx = best.x + t[0], ty = best.y + t[1];
+    for (const auto& run : placed.runs) {
+      // A run dilated by the padding: a box of rows and columns.
+      const int ty = best.y + run[0], x0 = std::max(0, best.x + run[1] - pad), x1 = std::min(n - 1, best.x + run[2] + pad);
       for (int y = std::max(0, ty - pad); y <= std::min(n - 1, ty + pad); ++y) {
-        for (int x = std::max(0, tx - pad); x <= std::min(n - 1, tx + pad); ++x) blocked[static_cast<size_t>(y) * static_cast<size_t>(n) + static_cast<size_t>(x)] = 1;
+        std::fill(blocked.begin() + static_cast<std::ptrdiff_t>(static_cast<size_t>(y) * static_cast<size_t>(n) + static_cast<size_t>(x0)),
+                  blocked.begin() + static_cast<std::ptrdiff_t>(static_cast<size_t>(y) * static_cast<size_t>(n) + static_cast<size_t>(x1) + 1), uint8_t{1});
         row0 = std::min(row0, y);
         row1 = std::max(row1, y);
+      }
+    }
+    // Mip-safe levels (uv_pack.hpp): the chart's level-k texels dilated by m_k - 1 block
+    // every level-0 texel inside them.
+    for (int k = 1; k <= o.mip_safe; ++k) {
+      const int b = 1 << k, reach = k == 1 ? 3 : 4, cn = n >> k;
+      int cx0 = cn, cy0 = cn, cx1 = -1, cy1 = -1;
+      for (const auto& t : best_texels) {
+        const int cx = t[0] >> k, cy = t[1] >> k;
+        cx0 = std::min(cx0, cx);
+        cy0 = std::min(cy0, cy);
+        cx1 = std::max(cx1, cx);
+        cy1 = std::max(cy1, cy);
+      }
+      const int cw = cx1 - cx0 + 1;
+      std::vector<uint8_t> coarse(static_cast<size_t>(cw) * static_cast<size_t>(cy1 - cy0 + 1), 0);
+      for (const auto& t : best_texels)
+        coarse[static_cast<size_t>((t[1] >> k) - cy0) * static_cast<size_t>(cw) + static_cast<size_t>((t[0] >> k) - cx0)] = 1;
+      // Rows of the dilated coarse set, as column ranges per coarse row (a box dilation).
+      for (int cy = std::max(0, cy0 - reach); cy <= std::min(cn - 1, cy1 + reach); ++cy) {
+        std::vector<uint8_t> row(static_cast<size_t>(cn), 0);
+        bool any = false;
+        for (int sy = std::max(cy0, cy - reach); sy <= std::min(cy1, cy + reach); ++sy)
+          for (int sx = cx0; sx <= cx1; ++sx)
+            if (coarse[static_cast<size_t>(sy - cy0) * static_cast<size_t>(cw) + static_cast<size_t>(sx - cx0)]) {
+              for (int x = std::max(0, sx - reach); x <= std::min(cn - 1, sx + reach); ++x) row[static_cast<size_t>(x)] = 1;
+              any = true;
+            }
+        if (!any) continue;
+        for (int y = cy * b; y < (cy + 1) * b; ++y) {
+          for (int cx = 0; cx < cn; ++cx)
+            if (row[static_cast<size_t>(cx)])
+              std::fill_n(blocked.begin() + static_cast<std::ptrdiff_t>(static_cast<size_t>(y) * static_cast<size_t>(n) + static_cast<size_t>(cx * b)), b, uint8_t{1});
+          row0 = std::min(row0, y);
+          row1 = std::max(row1, y);
+        }
       }
     }
     for (int row = row0; row <= row1; ++row) refresh_row(row);
@@ -156,6 +237,24 @@ bool place_all(const std::vector<Chart>& charts, const std::vector<size_t>& orde
 
 UvPackReport pack_uv_charts(Mesh& mesh, const UvPackOptions& o) {
   UvPackReport report;
+  if (o.mip_safe > 14 || (o.mip_safe >= 0 && o.size % (1 << o.mip_safe) != 0))
+    throw std::invalid_argument("--mip-safe " + std::to_string(o.mip_safe) + " needs an atlas size that is a multiple of 2^" + std::to_string(o.mip_safe));
+  {
+    // Each chart keeps at least one texel and `pad` free texels to the next, inside a border
+    // margin: more charts than fit that way cannot be packed at any scale.
+    const int pad = o.mip_safe >= 0 ? std::max(2, o.padding) : std::max(0, o.padding), margin = (std::max(0, o.padding) + 1) / 2;
+    const long long side = o.size - 2LL * margin;
+    if (side <= 0)
+      throw std::invalid_argument("padding " + std::to_string(o.padding) + " leaves no texel inside a " + std::to_string(o.size) + "-texel atlas");
+    const long long per_row = (side + pad) / (pad + 1);
+    size_t charts = 0;
+    uv_charts(mesh, &charts);
+    if (static_cast<long long>(charts) > per_row * per_row)
+      throw std::invalid_argument(std::to_string(charts) + " charts with padding " + std::to_string(pad) + " cannot fit a " + std::to_string(o.size) +
+                                  "^2 atlas at any scale (at most " + std::to_string(per_row * per_row) + ")");
+  }
+  for (double f : o.chart_scale)
+    if (!(f > 0) || !std::isfinite(f)) throw std::invalid_argument("chart scales must be positive and finite");
   size_t count = 0;
   const std::vector<int> chart_of = uv_charts(mesh, &count);
   std::vector<Chart> charts(count);
@@ -186,47 +285,72 @@ UvPackReport pack_uv_charts(Mesh& mesh, const UvPackOptions& o) {
     c.w = x1 - x0;
     c.h = y1 - y0;
     for (const auto& t : c.tris) c.area += 0.5 * std::abs((t[2] - t[0]) * (t[5] - t[1]) - (t[3] - t[1]) * (t[4] - t[0]));
-    total_area += c.area;
+    const size_t ci = static_cast<size_t>(&c - charts.data());
+    if (ci < o.chart_scale.size()) c.factor = o.chart_scale[ci];
+    total_area += c.area * c.factor * c.factor;
   }
   report.charts = count;
-  // Largest first (by box area, then index: deterministic).
-  std::vector<size_t> order(count);
-  for (size_t i = 0; i < count; ++i) order[i] = i;
-  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return charts[a].w * charts[a].h > charts[b].w * charts[b].h; });
-
-  // The scale: start where the charts' area would fill the atlas, halve until a packing
-  // succeeds, then bisect between the last failure and success to within 1 %.
-  const double n = o.size;
-  double hi = total_area > 0 ? std::sqrt(n * n / total_area) : n;
-  double lo = 0;
-  std::vector<Placement> where, best;
-  size_t touched = 0, best_touched = 0;
-  for (int k = 0; k < 40; ++k) {
-    ++report.attempts;
-    if (place_all(charts, order, hi, o, where, touched)) {
-      lo = hi;
-      best = where;
-      best_touched = touched;
-      break;
-    }
-    hi *= 0.5;
+  const int orientations = !o.rotate ? 1 : o.quality == PackQuality::fast ? 2 : 4;
+  const double tolerance = o.quality == PackQuality::fast ? 1.04 : o.quality == PackQuality::best ? 1.0025 : 1.01;
+  // Chart orders to try, each largest first (stable: ties keep the index order, deterministic):
+  // by box area; best also by longest side and by UV area, keeping the order that packs at
+  // the largest scale (the first on ties).
+  auto sorted_by = [&](auto key) {
+    std::vector<size_t> order(count);
+    for (size_t i = 0; i < count; ++i) order[i] = i;
+    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return key(charts[a]) > key(charts[b]); });
+    return order;
+  };
+  std::vector<std::vector<size_t>> orders;
+  orders.push_back(sorted_by([](const Chart& c) { return c.w * c.h * c.factor * c.factor; }));
+  if (o.quality == PackQuality::best) {
+    orders.push_back(sorted_by([](const Chart& c) { return std::max(c.w, c.h) * c.factor; }));
+    orders.push_back(sorted_by([](const Chart& c) { return c.area * c.factor * c.factor; }));
   }
-  if (best.empty() && count > 0) throw std::invalid_argument("the charts do not fit the atlas at any scale tried");
-  double fail = lo * 2;
-  // Bisect in [lo, fail): lo packs, fail did not (or was not tried beyond the start).
-  while (fail > 0 && fail / lo > 1.01 && report.attempts < 60) {
-    const double mid = std::sqrt(lo * fail);
-    ++report.attempts;
-    if (place_all(charts, order, mid, o, where, touched)) {
-      lo = mid;
-      best = where;
-      best_touched = touched;
-    } else {
-      fail = mid;
+
+  // The scale, per order: start where the charts' area would fill the atlas, halve until a
+  // packing succeeds, then bisect between the last failure and success to within the tolerance.
+  const double n = o.size;
+  double lo = 0;
+  std::vector<Placement> best;
+  size_t best_touched = 0;
+  for (const auto& order : orders) {
+    double hi = total_area > 0 ? std::sqrt(n * n / total_area) : n, ok = 0;
+    std::vector<Placement> where, found;
+    size_t touched = 0, found_touched = 0;
+    for (int k = 0; k < 40; ++k) {
+      ++report.attempts;
+      if (place_all(charts, order, hi, o, orientations, where, touched)) {
+        ok = hi;
+        found = where;
+        found_touched = touched;
+        break;
+      }
+      hi *= 0.5;
+    }
+    if (found.empty() && count > 0) throw std::invalid_argument("the charts do not fit the atlas at any scale tried");
+    double fail = ok * 2;
+    // Bisect in [ok, fail): ok packs, fail did not (or was not tried beyond the start).
+    for (int k = 0; fail > 0 && fail / ok > tolerance && k < 60; ++k) {
+      const double mid = std::sqrt(ok * fail);
+      ++report.attempts;
+      if (place_all(charts, order, mid, o, orientations, where, touched)) {
+        ok = mid;
+        found = where;
+        found_touched = touched;
+      } else {
+        fail = mid;
+      }
+    }
+    if (ok > lo) {
+      lo = ok;
+      best = std::move(found);
+      best_touched = found_touched;
     }
   }
   report.scale = lo;
-  report.utilization = static_cast<double>(best_touched) / (n * n);
+  report.texel_coverage = static_cast<double>(best_touched) / (n * n);
+  report.utilization = total_area * lo * lo / (n * n);
   // Move the UVs: q' = (turn(q) * s + offset) / size, v = 1 - q'y.
   for (size_t ci = 0; ci < count; ++ci) {
     const Chart& c = charts[ci];
@@ -235,7 +359,7 @@ UvPackReport pack_uv_charts(Mesh& mesh, const UvPackOptions& o) {
       for (auto h : face_halfedges(mesh, FaceHandle(f))) {
         const Vec2f uv = mesh.texcoord2D(h);
         const auto q = turn(c, uv[0], 1.0 - static_cast<double>(uv[1]), p.orientation);
-        const double x = (q[0] * lo + kInset + p.x) / n, y = (q[1] * lo + kInset + p.y) / n;
+        const double x = (q[0] * lo * c.factor + kInset + p.x) / n, y = (q[1] * lo * c.factor + kInset + p.y) / n;
         mesh.set_texcoord2D(h, Vec2f(static_cast<float>(x), static_cast<float>(1.0 - y)));
       }
   }

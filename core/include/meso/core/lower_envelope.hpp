@@ -3,6 +3,7 @@
 // 2012, algorithm DT(f)). Used by the distance field (streams) and exact dilation (bake).
 #pragma once
 
+#include <cstddef>
 #include <limits>
 #include <vector>
 

@@ -6,29 +6,56 @@
 #include "meso/core/mesh.hpp"
 
 #include <cstddef>
+#include <vector>
 
 namespace meso {
+
+// Search effort against utilisation: fast tries two orientations (0 and 90 degrees) and
+// stops the scale search within 4 %; balanced four orientations and 1 %; best also tries two
+// more chart orders (longest side first, UV area first) and stops within 0.25 %.
+enum class PackQuality { fast, balanced, best };
 
 struct UvPackOptions {
   int size = 1024;     // texels per side of the atlas
   int padding = 2;     // texels kept between charts (and to the atlas border: half of it)
-  bool rotate = true;  // try 0, 90, 180 and 270 degrees per chart
+  bool rotate = true;  // try quarter turns per chart (how many: quality)
+  PackQuality quality = PackQuality::balanced;
+  // Mip-safe padding down to level K (>= 0; -1: off). The guarantee below, which uv_check's
+  // mip_safe verifies exactly; `size` must be a multiple of 2^K.
+  int mip_safe = -1;
+  // Relative linear scale per chart (uv_charts() index; empty: all 1), e.g. from
+  // measure_chart_detail (uv_density.hpp): chart c's UVs are scaled by scale * chart_scale[c].
+  std::vector<double> chart_scale;
 };
 
 struct UvPackReport {
   size_t charts = 0;
   double scale = 0;           // texels per unit of the input UVs (one scale for every chart)
-  double utilization = 0;     // texels touched by charts / all texels
+  double utilization = 0;     // the charts' UV triangle areas / the atlas area (padding and touched-only texels not counted)
+  double texel_coverage = 0;  // texels touched by charts / all texels (conservative, as uv_check)
   int attempts = 0;           // packings tried while searching the scale
 };
 
 // Moves every chart (uv_charts) rigidly: rotation by a multiple of 90 degrees, one common
-// scale (relative chart sizes are kept), translation to integer texel offsets. Guarantees,
+// scale (relative chart sizes are kept, or changed by exactly chart_scale), translation to
+// integer texel offsets. Guarantees,
 // at options.size: no texel is touched (conservatively: the triangle meets its square) by
 // two charts, and touched texels of different charts are at least `padding` texels apart
 // (Chebyshev, hence also Euclidean) and at least padding / 2 from the atlas border. The
-// scale is the largest (within 1 %) for which the greedy placement succeeds. Charts with
-// no UV area keep a single texel. Deterministic. Requires UVs; throws InputError-free
+// scale is the largest (within the quality's tolerance) for which the greedy placement succeeds. Charts with
+// no UV area keep a single texel. Deterministic.
+//
+// With mip_safe = K >= 0, also: no texel of MIP levels 0..K that a bilinear lookup inside a
+// chart reads (the 2 x 2 texels around the lookup, so the level-k texels within one of a
+// level-k texel the chart touches) holds another chart's values, for box-filtered levels
+// (level k+1 the mean of 2 x 2 texels of level k) of a map whose empty texels were dilated
+// from their nearest written texel (meso bake's dilation), with clamp-to-edge addressing.
+// How: at level 0 touched texels of two charts are at least 3 apart (padding >= 2); at level
+// k >= 1 the level-k texels that two charts touch are at least m_k apart (Chebyshev, in level-k
+// texels), m_1 = 4, m_k = 5 beyond. Then every level-0 texel of a level-k texel that chart c
+// reads is at most sqrt(2) (2^(k+1) - 1) from c's nearest touched texel and at least
+// (m_k - 2) 2^k + 1 from any other chart's, which is farther: dilation fills it from c. It
+// costs about 4 * 2^K texels between charts. Anisotropic filtering reads farther and is not covered. Requires UVs; throws InputError-free
 // std::invalid_argument when the charts cannot fit even at the smallest scale tried.
 UvPackReport pack_uv_charts(Mesh& mesh, const UvPackOptions& options);
 
