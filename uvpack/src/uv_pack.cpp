@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -101,6 +102,35 @@ std::vector<std::array<Footprint, 4>> footprints_at(const std::vector<Chart>& ch
   return out;
 }
 
+// Maximum over rows with "the first row at or after `from` whose value is at least `need`" in
+// O(log n): the row scan skips full rows without visiting them.
+class RowMax {
+ public:
+  explicit RowMax(int rows) : size_(1) {
+    while (size_ < rows) size_ *= 2;
+    tree_.assign(2 * static_cast<size_t>(size_), 0);
+  }
+  void set(int row, int value) {
+    size_t i = static_cast<size_t>(row) + static_cast<size_t>(size_);
+    tree_[i] = value;
+    for (i /= 2; i >= 1; i /= 2) tree_[i] = std::max(tree_[2 * i], tree_[2 * i + 1]);
+  }
+  int value(int row) const { return tree_[static_cast<size_t>(row) + static_cast<size_t>(size_)]; }
+  // The first row >= from with value >= need, or -1.
+  int first_at_least(int from, int need) const { return find(1, 0, size_, from, need); }
+
+ private:
+  int find(size_t node, int lo, int hi, int from, int need) const {
+    if (hi <= from || tree_[node] < need) return -1;
+    if (hi - lo == 1) return lo;
+    const int mid = (lo + hi) / 2;
+    const int left = find(2 * node, lo, mid, from, need);
+    return left >= 0 ? left : find(2 * node + 1, mid, hi, from, need);
+  }
+  int size_;
+  std::vector<int> tree_;
+};
+
 // Greedy placement at scale s; false when some chart finds no room.
 bool place_all(const std::vector<Chart>& charts, const std::vector<size_t>& order, double s, const UvPackOptions& o, int orientations,
                std::vector<Placement>& where, size_t& touched) {
@@ -124,30 +154,62 @@ bool place_all(const std::vector<Chart>& charts, const std::vector<size_t>& orde
   // next_blocked[row * n + col]: the first blocked column >= col (n if none), so a run of a
   // footprint row is tested at once: [c0, c1] is free when next_blocked[c0] > c1.
   std::vector<int> next_blocked(static_cast<size_t>(n) * static_cast<size_t>(n));
+  // longest_free[row]: the longest run of free texels in the row: a footprint whose run is
+  // longer cannot have that run there, so whole rows are ruled out at once (a filled atlas
+  // has many rows with only short holes, which the column scan would otherwise visit one by one).
+  RowMax longest_free(n);
   auto refresh_row = [&](int row) {
-    int free_col = n, blocked_col = n;
+    int free_col = n, blocked_col = n, longest = 0;
     for (int col = n - 1; col >= 0; --col) {
       const size_t k = static_cast<size_t>(row) * static_cast<size_t>(n) + static_cast<size_t>(col);
       if (blocked[k]) blocked_col = col;
-      else free_col = col;
+      else {
+        free_col = col;
+        longest = std::max(longest, blocked_col - col);
+      }
       next_free[k] = free_col;
       next_blocked[k] = blocked_col;
     }
+    longest_free.set(row, longest);
   };
   for (int row = 0; row < n; ++row) refresh_row(row);
   where.assign(charts.size(), Placement{});
   touched = 0;
   for (size_t c : order) {
-    bool found = false;
-    Placement best;
-    for (int r = 0; r < orientations; ++r) {
+    // Each orientation's first fit in scan order (lowest row, then leftmost), the
+    // orientations searched in parallel; the chosen one is the least (y, x, orientation),
+    // whatever the timing. lowest_y lets a scan stop below a fit another one already found
+    // (it could not win), which changes work, not the result.
+    std::array<Placement, 4> fit;
+    std::array<bool, 4> fits{};
+    std::atomic<int> lowest_y{n};
+    auto scan = [&](int r) {
       const Footprint& fp = prints[c][static_cast<size_t>(r)];
       const int bw = fp.bw, bh = fp.bh;
-      const auto& runs = fp.runs;
-      // This orientation's first fit in scan order (lowest row, then leftmost), searched no
-      // lower than the best so far.
-      bool here = false;
-      for (int y = margin; y + bh <= n - margin && !here && !(found && y > best.y); ++y) {
+      // Runs tested widest first: they are the likeliest to be blocked, and any blocked run
+      // gives a valid jump, so the order changes the work, not the fit found.
+      std::vector<std::array<int, 3>> runs = fp.runs;
+      std::stable_sort(runs.begin(), runs.end(), [](const auto& p, const auto& q) { return p[2] - p[1] > q[2] - q[1]; });
+      // The footprint's widest run (row offset, length): rows without a free run that long
+      // are skipped through the row maximum.
+      int wide_row = 0, wide = 0;
+      for (const auto& run : runs)
+        if (run[2] - run[1] + 1 > wide) wide = run[2] - run[1] + 1, wide_row = run[0];
+      for (int y = margin; y + bh <= n - margin && y <= lowest_y.load(std::memory_order_relaxed); ++y) {
+        const int next = longest_free.first_at_least(y + wide_row, wide);
+        if (next < 0) return;
+        if (next - wide_row > y) {
+          y = next - wide_row - 1;  // the loop's ++y lands on it
+          continue;
+        }
+        bool room = true;
+        for (const auto& run : runs) {
+          if (longest_free.value(y + run[0]) < run[2] - run[1] + 1) {
+            room = false;
+            break;
+          }
+        }
+        if (!room) continue;
         int x = margin;
         while (x + bw <= n - margin) {
           int jump = -1;
@@ -161,15 +223,27 @@ bool place_all(const std::vector<Chart>& charts, const std::vector<size_t>& orde
             }
           }
           if (jump < 0) {
-            here = true;
-            if (!found || y < best.y || (y == best.y && x < best.x)) {
-              best = {r, x, y};
-              found = true;
+            fit[static_cast<size_t>(r)] = {r, x, y};
+            fits[static_cast<size_t>(r)] = true;
+            int seen = lowest_y.load(std::memory_order_relaxed);
+            while (y < seen && !lowest_y.compare_exchange_weak(seen, y, std::memory_order_relaxed)) {
             }
-            break;
+            return;
           }
           x = std::max(x + 1, jump);
         }
+      }
+    };
+    if (orientations == 1) scan(0);
+    else tbb::parallel_for(0, orientations, scan);
+    bool found = false;
+    Placement best;
+    for (int r = 0; r < orientations; ++r) {
+      if (!fits[static_cast<size_t>(r)]) continue;
+      const Placement& f = fit[static_cast<size_t>(r)];
+      if (!found || f.y < best.y || (f.y == best.y && f.x < best.x)) {
+        best = f;
+        found = true;
       }
     }
     if (!found) return false;
