@@ -8,8 +8,8 @@
 # sizes 512 and 1024 and paddings 2 and 4, checks every result with
 # `meso uvpack check --size N --padding P`, and prints Markdown tables.
 #
-# Inputs: bricks_base (meso's example reduced to 4000 faces: one chart), torus_200 (a torus
-# tiled into about 200 charts of varied shapes and sizes whose UVs overlap before packing) and
+# Inputs: bricks_base (meso's example reduced to 4000 faces: one chart), torus_40 and torus_200 (a torus
+# tiled into about 40 or 200 charts of varied shapes and sizes whose UVs overlap before packing) and
 # bricks_split (bricks_base cut into 150 irregular charts). See bench/uvpack_peers/gen_charts.mjs.
 #
 # xatlas variants (P = the padding asked for):
@@ -26,7 +26,7 @@
 # XATLAS_BRUTE=0 skips the brute-force variants (slow at 1024).
 #
 # Environment: MESO, MESO_EXAMPLE (binaries), OUT (work directory, default /tmp/uvpack_peers),
-# SIZES, PADDINGS (lists), XATLAS_BRUTE.
+# SIZES, PADDINGS, QUALITIES (lists; meso's --quality presets), XATLAS_BRUTE.
 set -euo pipefail
 
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -36,6 +36,7 @@ OUT=${OUT:-/tmp/uvpack_peers}
 SIZES=${SIZES:-"512 1024"}
 PADDINGS=${PADDINGS:-"2 4"}
 XATLAS_BRUTE=${XATLAS_BRUTE:-1}
+QUALITIES=${QUALITIES:-"fast balanced best"}
 PEERS=$ROOT/bench/uvpack_peers
 
 for b in "$MESO" "$MESO_EXAMPLE"; do
@@ -52,9 +53,10 @@ RUNS=$OUT/runs.jsonl
 # Inputs.
 "$MESO_EXAMPLE" -o "$OUT/bricks_high.obj" >&2
 "$MESO" --quiet meshreduce "$OUT/bricks_high.obj" -o "$OUT/bricks_base.obj" --faces 4000
+node "$PEERS/gen_charts.mjs" torus -o "$OUT/torus_40.obj" --charts 40 --seed 1 >&2
 node "$PEERS/gen_charts.mjs" torus -o "$OUT/torus_200.obj" --charts 200 --seed 1 >&2
 node "$PEERS/gen_charts.mjs" split "$OUT/bricks_base.obj" -o "$OUT/bricks_split.obj" --charts 150 --seed 1 >&2
-INPUTS="bricks_base torus_200 bricks_split"
+INPUTS=${INPUTS:-"bricks_base torus_40 torus_200 bricks_split"}
 
 now_ms() { echo $(( $(date +%s%N) / 1000000 )); }
 
@@ -87,16 +89,18 @@ for input in $INPUTS; do
     for pad in $PADDINGS; do
       tag=$input.$size.$pad
       echo "== $input size $size padding $pad" >&2
-      # meso
-      prefix=$OUT/$tag.meso
-      t0=$(now_ms)
-      if "$MESO" --json --quiet uvpack pack "$OUT/$input.obj" -o "$prefix.obj" --size "$size" --padding "$pad" >"$prefix.pack.json"; then
-        t1=$(now_ms)
-        verify "$input" "$size" "$pad" "$prefix"
-        record "$input" "$size" "$pad" meso meso $((t1 - t0)) false "$prefix"
-      else
-        record "$input" "$size" "$pad" meso meso 0 true "$prefix"
-      fi
+      # meso, at each quality preset
+      for quality in $QUALITIES; do
+        prefix=$OUT/$tag.meso-$quality
+        t0=$(now_ms)
+        if "$MESO" --json --quiet uvpack pack "$OUT/$input.obj" -o "$prefix.obj" --size "$size" --padding "$pad" --quality "$quality" >"$prefix.pack.json"; then
+          t1=$(now_ms)
+          verify "$input" "$size" "$pad" "$prefix"
+          record "$input" "$size" "$pad" meso "$quality" $((t1 - t0)) false "$prefix"
+        else
+          record "$input" "$size" "$pad" meso "$quality" 0 true "$prefix"
+        fi
+      done
       # xatlas variants
       half=$(( (pad + 1) / 2 ))
       variants=("P, bilinear, random|--padding $pad --bilinear 1")
@@ -126,7 +130,8 @@ echo
 echo "Times are wall-clock times of the whole packer process (read the OBJ, search the scale, pack,"
 echo "write the OBJ; meso also runs its checker on its result), with the number of packings each"
 echo "scale search made; for xatlas also the time of one packing (PackCharts at the final scale)."
-echo "Utilization: texels touched / all texels, by meso uvpack check on each result; both packers"
-echo "are checked at the same size and padding."
+echo "Utilization: the charts' UV triangle area / the atlas area (true coverage), by meso uvpack check"
+echo "on each result; texel coverage (texels touched / all texels) beside it; both packers are checked"
+echo "at the same size and padding."
 echo
 node "$PEERS/table.mjs" "$RUNS"

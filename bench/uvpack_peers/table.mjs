@@ -16,8 +16,11 @@ const runs = readFileSync(process.argv[2], 'utf8').split('\n').filter((l) => l.t
 });
 const variants = [...new Set(runs.filter((r) => r.packer === 'xatlas').map((r) => r.variant))];
 const inputs = [...new Set(runs.map((r) => r.input))];
+const qualities = [...new Set(runs.filter((r) => r.packer === 'meso').map((r) => r.variant))];
+// meso's row in the comparison: its default preset when it ran, else the first one.
+const mesoMain = qualities.includes('balanced') ? 'balanced' : qualities[0];
 const find = (input, size, padding, packer, variant) =>
-  runs.find((r) => r.input === input && r.size === size && r.padding === padding && r.packer === packer && (packer === 'meso' || r.variant === variant));
+  runs.find((r) => r.input === input && r.size === size && r.padding === padding && r.packer === packer && r.variant === (packer === 'meso' ? variant ?? mesoMain : variant));
 
 const pct = (x) => `${(100 * x).toFixed(1)} %`;
 const secs = (ms) => `${(ms / 1000).toFixed(2)} s`;
@@ -36,11 +39,12 @@ function verdict(r, charts) {
   return issues.length ? issues.join(', ') : 'clean';
 }
 const util = (r) => (r && !r.failed ? r.check.utilization : NaN);
+const coverage = (r) => (r && !r.failed ? r.check.texel_coverage : NaN);
 
 const main = variants[0];
 const lines = [];
-lines.push(`### meso uvpack pack vs xatlas (${main})`, '');
-lines.push('| input | charts | size | padding | meso utilization | meso time (packings) | xatlas utilization | xatlas time (packings; one packing) | utilization ratio meso / xatlas | meso check | xatlas check |');
+lines.push(`### meso uvpack pack (--quality ${mesoMain}) vs xatlas (${main})`, '');
+lines.push('| input | charts | size | padding | meso utilization (texel coverage) | meso time (packings) | xatlas utilization (texel coverage) | xatlas time (packings; one packing) | utilization ratio meso / xatlas | meso check | xatlas check |');
 lines.push('|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---|');
 for (const input of inputs)
   for (const size of [...new Set(runs.filter((r) => r.input === input).map((r) => r.size))])
@@ -50,7 +54,17 @@ for (const input of inputs)
       const charts = m?.charts ?? x?.charts;
       const mt = m && !m.failed ? `${secs(m.wall_ms)} (${m.pack.attempts})` : '-';
       const xt = x && !x.failed ? `${secs(x.wall_ms)} (${x.pack.attempts}; ${secs(x.pack.ms.final_pack)})` : '-';
-      lines.push(`| ${input} | ${charts} | ${size} | ${padding} | ${pct(util(m))} | ${mt} | ${pct(util(x))} | ${xt} | ${(util(m) / util(x)).toFixed(3)} | ${verdict(m, charts)} | ${verdict(x, charts)} |`);
+      lines.push(`| ${input} | ${charts} | ${size} | ${padding} | ${pct(util(m))} (${pct(coverage(m))}) | ${mt} | ${pct(util(x))} (${pct(coverage(x))}) | ${xt} | ${(util(m) / util(x)).toFixed(3)} | ${verdict(m, charts)} | ${verdict(x, charts)} |`);
+    }
+
+lines.push('', '### meso\'s quality presets (utilization / texel coverage / wall time (packings))', '');
+lines.push(`| input | size | padding | ${qualities.map((q) => `meso ${q}`).join(' | ')} |`);
+lines.push(`|---|---:|---:|${qualities.map(() => '---:').join('|')}|`);
+for (const input of inputs)
+  for (const size of [...new Set(runs.filter((r) => r.input === input).map((r) => r.size))])
+    for (const padding of [...new Set(runs.filter((r) => r.input === input && r.size === size).map((r) => r.padding))]) {
+      const cell = (r) => (r && !r.failed ? `${pct(util(r))} / ${pct(coverage(r))} / ${secs(r.wall_ms)} (${r.pack.attempts})${verdict(r, r.charts) === 'clean' ? '' : ' **' + verdict(r, r.charts) + '**'}` : 'failed');
+      lines.push(`| ${input} | ${size} | ${padding} | ${qualities.map((q) => cell(find(input, size, padding, 'meso', q))).join(' | ')} |`);
     }
 
 lines.push('', '### xatlas variants (utilization per meso\'s checker / wall time; "clean" = no overlap, no shared texel, no padding violation)', '');

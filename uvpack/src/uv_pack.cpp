@@ -131,6 +131,46 @@ class RowMax {
   std::vector<int> tree_;
 };
 
+// Per row, the free texels' remaining run lengths (rem[c]: free texels from column c on, 0 where
+// blocked) in a max tree, answering "the first column >= from where a free run of at least
+// `need` texels continues" in O(log n): a footprint run skips every hole too short for it at
+// once, instead of one hole per step (a full atlas has hundreds of short holes per row).
+class RowRuns {
+ public:
+  RowRuns(int rows, int columns) : size_(1) {
+    while (size_ < columns) size_ *= 2;
+    tree_.assign(static_cast<size_t>(rows) * 2 * static_cast<size_t>(size_), 0);
+  }
+  int* leaves(int row) { return tree_.data() + static_cast<size_t>(row) * 2 * static_cast<size_t>(size_) + static_cast<size_t>(size_); }
+  int rem(int row, int column) const { return tree_[base(row) + static_cast<size_t>(size_) + static_cast<size_t>(column)]; }
+  void rebuild(int row) {
+    int* t = tree_.data() + base(row);
+    for (int i = size_ - 1; i >= 1; --i) t[i] = std::max(t[2 * i], t[2 * i + 1]);
+  }
+  int longest(int row) const { return tree_[base(row) + 1]; }
+  // After leaves [l, r] of the row changed: their ancestors, level by level.
+  void update(int row, int l, int r) {
+    int* t = tree_.data() + base(row);
+    for (size_t lo = (static_cast<size_t>(l) + static_cast<size_t>(size_)) / 2, hi = (static_cast<size_t>(r) + static_cast<size_t>(size_)) / 2; lo >= 1;
+         lo /= 2, hi /= 2)
+      for (size_t i = lo; i <= hi; ++i) t[i] = std::max(t[2 * i], t[2 * i + 1]);
+  }
+  // The first column >= from with rem >= need, or -1.
+  int first_at_least(int row, int from, int need) const { return find(tree_.data() + base(row), 1, 0, size_, from, need); }
+
+ private:
+  size_t base(int row) const { return static_cast<size_t>(row) * 2 * static_cast<size_t>(size_); }
+  static int find(const int* t, int node, int lo, int hi, int from, int need) {
+    if (hi <= from || t[node] < need) return -1;
+    if (hi - lo == 1) return lo;
+    const int mid = (lo + hi) / 2;
+    const int left = find(t, 2 * node, lo, mid, from, need);
+    return left >= 0 ? left : find(t, 2 * node + 1, mid, hi, from, need);
+  }
+  int size_;
+  std::vector<int> tree_;
+};
+
 // Greedy placement at scale s; false when some chart finds no room.
 bool place_all(const std::vector<Chart>& charts, const std::vector<size_t>& order, double s, const UvPackOptions& o, int orientations,
                std::vector<Placement>& where, size_t& touched) {
@@ -148,29 +188,48 @@ bool place_all(const std::vector<Chart>& charts, const std::vector<size_t>& orde
   if (need > inside) return false;
   // Texels within `pad` of a placed chart's texel (Chebyshev): a new chart's texels must
   // avoid them. next_free[row * n + col]: the first unblocked column >= col in the row (n
-  // if none), so a scan jumps over blocked runs instead of stepping through them.
+  // if none), so a scan jumps over blocked runs instead of stepping through them; runs: the
+  // free run lengths per row (a run of a footprint row fits at c0 when rem(c0) >= its length).
   std::vector<uint8_t> blocked(static_cast<size_t>(n) * static_cast<size_t>(n), 0);
   std::vector<int> next_free(static_cast<size_t>(n) * static_cast<size_t>(n));
-  // next_blocked[row * n + col]: the first blocked column >= col (n if none), so a run of a
-  // footprint row is tested at once: [c0, c1] is free when next_blocked[c0] > c1.
-  std::vector<int> next_blocked(static_cast<size_t>(n) * static_cast<size_t>(n));
-  // longest_free[row]: the longest run of free texels in the row: a footprint whose run is
-  // longer cannot have that run there, so whole rows are ruled out at once (a filled atlas
-  // has many rows with only short holes, which the column scan would otherwise visit one by one).
+  RowRuns runs_free(n, n);
+  // longest_free: per row the longest free run, so whole rows without room for a footprint's
+  // widest run are skipped at once.
   RowMax longest_free(n);
   auto refresh_row = [&](int row) {
-    int free_col = n, blocked_col = n, longest = 0;
+    int free_col = n, blocked_col = n;
+    int* rem = runs_free.leaves(row);
     for (int col = n - 1; col >= 0; --col) {
       const size_t k = static_cast<size_t>(row) * static_cast<size_t>(n) + static_cast<size_t>(col);
       if (blocked[k]) blocked_col = col;
-      else {
-        free_col = col;
-        longest = std::max(longest, blocked_col - col);
-      }
+      else free_col = col;
       next_free[k] = free_col;
-      next_blocked[k] = blocked_col;
+      rem[col] = blocked_col - col;
     }
-    longest_free.set(row, longest);
+    runs_free.rebuild(row);
+    longest_free.set(row, runs_free.longest(row));
+  };
+  // Blocks columns [a, b] of a row and updates what depends on them: only the columns from
+  // the stretch just left of a (free texels whose run now ends at a, or blocked ones whose next
+  // free texel was in [a, b]) to b change; the same state refresh_row would compute.
+  auto block_range = [&](int row, int a, int b) {
+    const size_t base = static_cast<size_t>(row) * static_cast<size_t>(n);
+    int* rem = runs_free.leaves(row);
+    std::fill(blocked.begin() + static_cast<std::ptrdiff_t>(base + static_cast<size_t>(a)),
+              blocked.begin() + static_cast<std::ptrdiff_t>(base + static_cast<size_t>(b) + 1), uint8_t{1});
+    const int after = b + 1 < n ? next_free[base + static_cast<size_t>(b) + 1] : n;
+    for (int c = a; c <= b; ++c) {
+      next_free[base + static_cast<size_t>(c)] = after;
+      rem[c] = 0;
+    }
+    int l = a;
+    if (a > 0 && blocked[base + static_cast<size_t>(a) - 1]) {
+      for (int c = a - 1; c >= 0 && blocked[base + static_cast<size_t>(c)]; --c, l = c + 1) next_free[base + static_cast<size_t>(c)] = after;
+    } else {
+      for (int c = a - 1; c >= 0 && !blocked[base + static_cast<size_t>(c)]; --c, l = c + 1) rem[c] = a - c;
+    }
+    runs_free.update(row, l, b);
+    longest_free.set(row, runs_free.longest(row));
   };
   for (int row = 0; row < n; ++row) refresh_row(row);
   where.assign(charts.size(), Placement{});
@@ -204,7 +263,7 @@ bool place_all(const std::vector<Chart>& charts, const std::vector<size_t>& orde
         }
         bool room = true;
         for (const auto& run : runs) {
-          if (longest_free.value(y + run[0]) < run[2] - run[1] + 1) {
+          if (runs_free.longest(y + run[0]) < run[2] - run[1] + 1) {
             room = false;
             break;
           }
@@ -212,13 +271,19 @@ bool place_all(const std::vector<Chart>& charts, const std::vector<size_t>& orde
         if (!room) continue;
         int x = margin;
         while (x + bw <= n - margin) {
+          // The widest run first, through its row's tree: the next column where it fits.
+          const auto& w0 = runs.front();
+          const int c0 = runs_free.first_at_least(y + w0[0], x + w0[1], w0[2] - w0[1] + 1);
+          if (c0 < 0) break;
+          x = c0 - w0[1];
+          if (x + bw > n - margin) break;
           int jump = -1;
           for (const auto& run : runs) {
-            const size_t row = static_cast<size_t>(y + run[0]) * static_cast<size_t>(n);
-            const int hit = next_blocked[row + static_cast<size_t>(x + run[1])];
+            const int row = y + run[0];
+            const int hit = x + run[1] + runs_free.rem(row, x + run[1]);  // the first blocked column from the run's start
             if (hit <= x + run[2]) {
               // The run must start past the blocked stretch that begins at `hit`.
-              jump = next_free[row + static_cast<size_t>(hit)] - run[1];
+              jump = next_free[static_cast<size_t>(row) * static_cast<size_t>(n) + static_cast<size_t>(hit)] - run[1];
               break;
             }
           }
@@ -259,12 +324,7 @@ bool place_all(const std::vector<Chart>& charts, const std::vector<size_t>& orde
     for (const auto& run : placed.runs) {
       // A run dilated by the padding: a box of rows and columns.
       const int ty = best.y + run[0], x0 = std::max(0, best.x + run[1] - pad), x1 = std::min(n - 1, best.x + run[2] + pad);
-      for (int y = std::max(0, ty - pad); y <= std::min(n - 1, ty + pad); ++y) {
-        std::fill(blocked.begin() + static_cast<std::ptrdiff_t>(static_cast<size_t>(y) * static_cast<size_t>(n) + static_cast<size_t>(x0)),
-                  blocked.begin() + static_cast<std::ptrdiff_t>(static_cast<size_t>(y) * static_cast<size_t>(n) + static_cast<size_t>(x1) + 1), uint8_t{1});
-        row0 = std::min(row0, y);
-        row1 = std::max(row1, y);
-      }
+      for (int y = std::max(0, ty - pad); y <= std::min(n - 1, ty + pad); ++y) block_range(y, x0, x1);
     }
     // Mip-safe levels (uv_pack.hpp): the chart's level-k texels dilated by m_k - 1 block
     // every level-0 texel inside them.
