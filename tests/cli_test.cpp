@@ -700,3 +700,57 @@ TEST(Cli, UvpackPackUnwrapsAMeshWithoutUvs) {
 
 }  // namespace
 }  // namespace meso
+
+namespace meso {
+namespace {
+
+// frames --curvature-map: the per-texel second fundamental form of a sphere (radius 2,
+// outward normals, UVs around and pole to pole) as a float EXR with R, G, B, A, in
+// 1/object units; bad sizes and extensions are usage errors and leave no file.
+TEST(Cli, FramesWritesACurvatureMap) {
+  test::TempDir d;
+  const double r = 2.0, pi = 3.14159265358979323846;
+  const Mesh sphere = test::make_parametric(48, 24, [&](double s, double t) {
+    const double th = pi * (0.05 + 0.9 * t), ph = 2 * pi * s;
+    return Vec3f(float(r * std::sin(th) * std::cos(ph)), float(r * std::sin(th) * std::sin(ph)), float(-r * std::cos(th)));
+  }, true, false);
+  write_mesh(sphere, d / "sphere.obj");
+  const std::string in = (d / "sphere.obj").string(), out = (d / "framed.glb").string(), map = (d / "maps" / "curvature.exr").string();
+  const Result ok = run("--json frames " + in + " -o " + out + " --curvature-map " + map + " --size 64x32");
+  ASSERT_EQ(ok.code, 0) << ok.err;
+  ASSERT_TRUE(fs::exists(map));
+  EXPECT_TRUE(fs::exists(out));
+  const Image k = read_image(map);
+  EXPECT_EQ(k.width, 64);
+  EXPECT_EQ(k.height, 32);
+  EXPECT_EQ(k.channels, 4);
+  EXPECT_EQ(std::get<std::string>(k.metadata.at("quantity")), "curvature");
+  EXPECT_EQ(std::get<std::string>(k.metadata.at("units")), "1/object");
+  for (float v : k.pixels) ASSERT_TRUE(std::isfinite(v));
+  // A texel on the equator, away from the seam: K = I / r.
+  EXPECT_NEAR(k.at(32, 16, 0), 1 / r, 0.05 / r);
+  EXPECT_NEAR(k.at(32, 16, 1), 0.0, 0.05 / r);
+  EXPECT_NEAR(k.at(32, 16, 2), 1 / r, 0.05 / r);
+  EXPECT_EQ(k.at(32, 16, 3), 1.0f);
+  const auto report = nlohmann::json::parse(ok.out);
+  ASSERT_TRUE(report.contains("curvature_map")) << ok.out;
+  EXPECT_EQ(report["curvature_map"]["output"], map);
+  EXPECT_EQ(report["curvature_map"]["width"], 64);
+  EXPECT_EQ(report["curvature_map"]["height"], 32);
+  EXPECT_EQ(report["curvature_map"]["texels"], 64 * 32) << "the UVs cover the whole map";
+  EXPECT_NEAR(report["curvature_map"]["max"].get<double>(), 1 / r, 0.05 / r);
+
+  for (const std::string bad : {"--size 0", "--size 64y32", "--size x", "--size 40000"}) {
+    const Result r2 = run("frames " + in + " -o " + (d / "bad.glb").string() + " --curvature-map " + (d / "bad.exr").string() + " " + bad);
+    EXPECT_EQ(r2.code, 2) << bad << ": " << r2.err;
+    EXPECT_EQ(lines(r2.err), 1u) << r2.err;
+  }
+  EXPECT_EQ(run("frames " + in + " -o " + (d / "bad.glb").string() + " --size 64").code, 2) << "--size needs --curvature-map";
+  EXPECT_EQ(run("frames " + in + " -o " + (d / "bad.glb").string() + " --curvature-map " + (d / "bad.png").string()).code, 2);
+  EXPECT_FALSE(fs::exists(d / "bad.glb"));
+  EXPECT_FALSE(fs::exists(d / "bad.exr"));
+  EXPECT_FALSE(fs::exists(d / "bad.png"));
+}
+
+}  // namespace
+}  // namespace meso

@@ -1,26 +1,42 @@
 #include "cli.hpp"
 
 #include "meso/bake/curvature.hpp"
+#include "meso/bake/curvature_map.hpp"
 #include "meso/bake/tangent_frame.hpp"
 #include "meso/core/error.hpp"
 #include "meso/formats/atomic_file.hpp"
+#include "meso/formats/image_io.hpp"
 #include "meso/formats/mesh_io.hpp"
 
 #include <algorithm>
+#include <cctype>
+#include <filesystem>
 
 namespace meso::cli {
 
 void add_frames(CLI::App& app, Context& ctx) {
   struct Args {
-    std::string input, output;
+    std::string input, output, curvature_map, size = "1024";
   };
   auto args = std::make_shared<Args>();
   CLI::App* sub = app.add_subcommand("frames", "Tangent frames (MikkTSpace conventions) and principal curvatures of a base mesh");
   sub->add_option("input", args->input, "Base mesh with UVs")->required();
   sub->add_option("-o,--output", args->output, "Output mesh; .gltf/.glb carry TANGENT, _CURVATURE and _PRINCIPAL_DIRECTION")->required();
+  CLI::Option* map = sub->add_option("--curvature-map", args->curvature_map,
+                                     "Also write the second fundamental form per texel of the UV layout (float32 EXR: R = k_tt, G = k_tb, "
+                                     "B = k_bb in 1/object units in the texel's tangent frame, A = 1 computed / 0 dilated; see docs/formats.md)");
+  sub->add_option("--size", args->size, "Curvature map size: N or WxH texels (default 1024)")->needs(map);
   sub->callback([&ctx, args] {
     ctx.run = [&ctx, args](nlohmann::json& report, Progress&) {
       if (!is_writable_mesh_extension(args->output)) throw UsageError(args->output + ": unknown mesh extension (use .obj, .ply, .gltf or .glb)");
+      CurvatureMapOptions map_options;
+      const bool want_map = !args->curvature_map.empty();
+      if (want_map) {
+        parse_size(args->size, map_options.width, map_options.height);
+        std::string ext = std::filesystem::path(args->curvature_map).extension().string();
+        std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+        if (ext != ".exr") throw UsageError(args->curvature_map + ": the curvature map is a float EXR (use .exr)");
+      }
       nlohmann::json in_report;
       Mesh mesh = load_mesh(ctx.globals, args->input, in_report);
       if (!has_uvs(mesh)) throw InputError(args->input, "has no texture coordinates; tangent frames need a UV mapping");
@@ -42,12 +58,28 @@ void add_frames(CLI::App& app, Context& ctx) {
         if (!mesh.is_boundary(h) && frames[static_cast<size_t>(h.idx())].sign < 0) ++mirrored;
       OutputSet outputs;
       write_mesh(mesh, outputs.add(args->output));
+      CurvatureMap cmap;
+      if (want_map) {
+        cmap = bake_curvature_map(mesh, frames, curvature, map_options);
+        write_image(cmap.image, outputs.add(args->curvature_map), PixelFormat::float32);
+        if (cmap.undefined)
+          warn(ctx.globals, args->curvature_map + ": " + std::to_string(cmap.undefined) + " texels have no tangent frame (filled from neighbours)");
+      }
       outputs.commit();
       report = {{"command", "frames"},
                 {"input", in_report},
                 {"output", args->output},
                 {"mirrored_corners", mirrored},
                 {"curvature", {{"min", k_lo}, {"max", k_hi}, {"two_ring_vertices", two_ring}, {"unfit_vertices", unfit}}}};
+      if (want_map)
+        report["curvature_map"] = {{"output", args->curvature_map},
+                                   {"width", map_options.width},
+                                   {"height", map_options.height},
+                                   {"channels", nlohmann::json::array({"R", "G", "B", "A"})},
+                                   {"texels", cmap.texels},
+                                   {"undefined_texels", cmap.undefined},
+                                   {"min", cmap.min},
+                                   {"max", cmap.max}};
       return 0;
     };
   });
