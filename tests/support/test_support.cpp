@@ -62,6 +62,26 @@ Mesh make_seamed_cube() {
   return m;
 }
 
+Mesh make_uv_quads(const std::vector<std::array<float, 4>>& boxes) {
+  Mesh m;
+  m.request_halfedge_texcoords2D();
+  float z = 0;
+  for (const auto& b : boxes) {
+    const Vec2f uv[4] = {{b[0], b[1]}, {b[2], b[1]}, {b[2], b[3]}, {b[0], b[3]}};
+    VertexHandle v[4];
+    for (int k = 0; k < 4; ++k) v[k] = m.add_vertex(Vec3f(uv[k][0], uv[k][1], z));
+    for (const auto& tri : {std::array<int, 3>{0, 1, 2}, std::array<int, 3>{0, 2, 3}}) {
+      const FaceHandle f = m.add_face(v[tri[0]], v[tri[1]], v[tri[2]]);
+      for (auto h : face_halfedges(m, f))
+        for (int k = 0; k < 4; ++k)
+          if (m.to_vertex_handle(h) == v[k]) m.set_texcoord2D(h, uv[k]);
+    }
+    z += 1;
+  }
+  compute_angle_weighted_normals(m);
+  return m;
+}
+
 Mesh make_grid(int columns, int rows, float sx, float sy) {
   Mesh m;
   m.request_halfedge_texcoords2D();

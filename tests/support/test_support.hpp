@@ -3,7 +3,9 @@
 
 #include "meso/core/mesh.hpp"
 
+#include <array>
 #include <filesystem>
+#include <vector>
 #include <functional>
 #include <string>
 
@@ -34,6 +36,10 @@ Mesh make_seamed_cube();
 // A width x height grid in the z = 0 plane from (0,0) to (sx, sy), UV = (x / sx, y / sy),
 // with smooth normals (0,0,1).
 Mesh make_grid(int columns, int rows, float sx = 1.0f, float sy = 1.0f);
+
+// Separate quads, each its own UV chart: quad q spans UV box (u0, v0)-(u1, v1) = boxes[q], and
+// in 3D the rectangle of the same extent in the plane z = q (two triangles; normals +z).
+Mesh make_uv_quads(const std::vector<std::array<float, 4>>& boxes);
 
 // A (columns x rows)-quad grid mapped through surface(s, t), s, t in [0, 1], UV = (s, t).
 // With wrap_s (wrap_t) the last column (row) of vertices is the first one again (a closed

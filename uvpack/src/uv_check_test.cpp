@@ -175,25 +175,11 @@ TEST(UvCheck, ReportsDegenerateAndOutsideFaces) {
 // Axis-aligned UV quads, each its own chart: [x0, x1) x [y0, y1) in texels of a size^2 texture
 // (rows from the top), so exactly those texels are touched.
 Mesh texel_quads(const std::vector<std::array<int, 4>>& boxes, int size) {
-  Mesh m;
-  m.request_halfedge_texcoords2D();
-  float z = 0;
-  for (const auto& b : boxes) {
-    const float u0 = static_cast<float>(b[0]) / size, u1 = static_cast<float>(b[1]) / size;
-    const float v0 = 1.0f - static_cast<float>(b[3]) / size, v1 = 1.0f - static_cast<float>(b[2]) / size;
-    const VertexHandle p = m.add_vertex(Vec3f(u0, v0, z)), q = m.add_vertex(Vec3f(u1, v0, z)), r = m.add_vertex(Vec3f(u1, v1, z)),
-                       s = m.add_vertex(Vec3f(u0, v1, z));
-    for (const auto& tri : {std::array<VertexHandle, 3>{p, q, r}, std::array<VertexHandle, 3>{p, r, s}}) {
-      const FaceHandle f = m.add_face(tri[0], tri[1], tri[2]);
-      for (auto h : face_halfedges(m, f)) {
-        const Vec3f x = m.point(m.to_vertex_handle(h));
-        m.set_texcoord2D(h, Vec2f(x[0], x[1]));
-      }
-    }
-    z += 1;
-  }
-  compute_angle_weighted_normals(m);
-  return m;
+  std::vector<std::array<float, 4>> uv;
+  for (const auto& b : boxes)
+    uv.push_back({static_cast<float>(b[0]) / size, 1.0f - static_cast<float>(b[3]) / size, static_cast<float>(b[1]) / size,
+                  1.0f - static_cast<float>(b[2]) / size});
+  return test::make_uv_quads(uv);
 }
 
 // Two 8 x 8-texel charts, 2 texels apart in x, at 64^2, worked by hand. Level 0: the gap's

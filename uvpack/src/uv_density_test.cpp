@@ -1,6 +1,7 @@
 #include "meso/uvpack/uv_density.hpp"
 
 #include "meso/uvpack/uv_pack.hpp"
+#include "test_support.hpp"
 
 #include <gtest/gtest.h>
 
@@ -12,24 +13,7 @@ namespace {
 
 // Two equal square charts side by side in UV: A on u in [0.05, 0.45], B on [0.55, 0.95],
 // v in [0.3, 0.7].
-Mesh two_squares() {
-  Mesh m;
-  m.request_halfedge_texcoords2D();
-  for (int c = 0; c < 2; ++c) {
-    const float u0 = c == 0 ? 0.05f : 0.55f, u1 = u0 + 0.4f, v0 = 0.3f, v1 = 0.7f, z = static_cast<float>(c);
-    const VertexHandle p = m.add_vertex(Vec3f(u0, v0, z)), q = m.add_vertex(Vec3f(u1, v0, z)), r = m.add_vertex(Vec3f(u1, v1, z)),
-                       s = m.add_vertex(Vec3f(u0, v1, z));
-    for (const auto& tri : {std::array<VertexHandle, 3>{p, q, r}, std::array<VertexHandle, 3>{p, r, s}}) {
-      const FaceHandle f = m.add_face(tri[0], tri[1], tri[2]);
-      for (auto h : face_halfedges(m, f)) {
-        const Vec3f x = m.point(m.to_vertex_handle(h));
-        m.set_texcoord2D(h, Vec2f(x[0], x[1]));
-      }
-    }
-  }
-  compute_angle_weighted_normals(m);
-  return m;
-}
+Mesh two_squares() { return test::make_uv_quads({{0.05f, 0.3f, 0.45f, 0.7f}, {0.55f, 0.3f, 0.95f, 0.7f}}); }
 
 double chart_uv_area(const Mesh& m, int first_face) {
   return 0.5 * std::abs(static_cast<double>(uv_double_area(m, FaceHandle(first_face)))) +

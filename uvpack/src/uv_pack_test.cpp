@@ -20,23 +20,12 @@ namespace {
 Mesh scattered_quads(int count, unsigned seed) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<float> size(0.05f, 0.4f), aspect(0.3f, 1.0f);
-  Mesh m;
-  m.request_halfedge_texcoords2D();
+  std::vector<std::array<float, 4>> boxes;
   for (int q = 0; q < count; ++q) {
     const float w = size(rng), h = w * aspect(rng);
-    const float z = static_cast<float>(q);
-    const VertexHandle a = m.add_vertex(Vec3f(0, 0, z)), b = m.add_vertex(Vec3f(w, 0, z)), c = m.add_vertex(Vec3f(w, h, z)),
-                       d = m.add_vertex(Vec3f(0, h, z));
-    for (const auto& tri : {std::array<VertexHandle, 3>{a, b, c}, std::array<VertexHandle, 3>{a, c, d}}) {
-      const FaceHandle f = m.add_face(tri[0], tri[1], tri[2]);
-      for (auto hh : face_halfedges(m, f)) {
-        const Vec3f p = m.point(m.to_vertex_handle(hh));
-        m.set_texcoord2D(hh, Vec2f(p[0], p[1]));
-      }
-    }
+    boxes.push_back({0, 0, w, h});
   }
-  compute_angle_weighted_normals(m);
-  return m;
+  return test::make_uv_quads(boxes);
 }
 
 double uv_area(const Mesh& m, FaceHandle f) { return 0.5 * std::abs(static_cast<double>(uv_double_area(m, f))); }
