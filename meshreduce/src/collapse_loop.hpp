@@ -142,6 +142,7 @@ class CollapseLoop {
   };
 
   bool evaluate(Mesh::EdgeHandle e, Candidate& c);
+  bool collapse_ok(HalfedgeHandle h);
   void gather_fan(Candidate& c);
   void walk(Candidate& c, VertexHandle v, HalfedgeHandle start, int start_side, bool from_v0);
   Vec2f reproject_uv(const Candidate& c) const;
@@ -176,6 +177,8 @@ class CollapseLoop {
   std::vector<int> hpos_;
   std::vector<FanFace> fan_;
   std::vector<int> around_;  // edges around the collapsing edge's ends
+  std::vector<uint32_t> ring_mark_;  // collapse_ok: stamp of v1's one-ring
+  uint32_t ring_stamp_ = 0;
   std::vector<std::unique_ptr<CollapseModule>> modules_;
   size_t faces_ = 0;
   double max_cost_ = 0;
