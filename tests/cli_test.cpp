@@ -754,3 +754,30 @@ TEST(Cli, FramesWritesACurvatureMap) {
 
 }  // namespace
 }  // namespace meso
+
+// ---- meshreduce: --quality presets ----
+
+namespace meso {
+namespace {
+
+TEST(CliMeshreduce, QualityPresets) {
+  test::TempDir d;
+  const std::string in = (d / "grid.obj").string();
+  test::write_text(d / "grid.obj", two_part_grid_obj());
+  for (const std::string q : {"fast", "balanced", "best"}) {
+    const Result r = run("meshreduce " + in + " -o " + (d / (q + ".obj")).string() + " --faces 60 --quality " + q + " --no-measure --json");
+    ASSERT_EQ(r.code, 0) << r.err;
+    const auto report = nlohmann::json::parse(r.out);
+    EXPECT_EQ(report["quality"], q);
+    EXPECT_LE(report["output"]["faces"].get<size_t>(), 60u);
+  }
+  // The default is balanced, and best is today the same bytes.
+  ASSERT_EQ(run("meshreduce " + in + " -o " + (d / "default.obj").string() + " --faces 60 --no-measure").code, 0);
+  EXPECT_EQ(test::read_text(d / "default.obj"), test::read_text(d / "balanced.obj"));
+  EXPECT_EQ(test::read_text(d / "best.obj"), test::read_text(d / "balanced.obj"));
+  EXPECT_EQ(run("meshreduce " + in + " -o " + (d / "x.obj").string() + " --faces 60 --quality fastest").code, 2);
+  EXPECT_EQ(run("meshreduce --from-progressive a.pm --faces 10 -o " + (d / "x.obj").string() + " --quality fast").code, 2);
+}
+
+}  // namespace
+}  // namespace meso

@@ -92,6 +92,7 @@ void add_meshreduce(CLI::App& app, Context& ctx) {
     float max_aspect_ratio = ReduceOptions{}.max_aspect_ratio;
     bool no_measure = false, lock_boundary = false;
     std::vector<std::string> lock_groups;
+    std::string quality = "balanced";
   };
   auto args = std::make_shared<Args>();
   CLI::App* sub = app.add_subcommand("meshreduce", "Reduce a high-poly mesh to a base mesh (quadric edge collapse with optimal placement)");
@@ -134,6 +135,13 @@ void add_meshreduce(CLI::App& app, Context& ctx) {
   from->excludes(progressive);
   from->excludes(lock_boundary);
   from->excludes(lock_group);
+  auto* quality = sub->add_option("--quality", args->quality,
+                                  "Speed against error: fast (lazy heap keys: queued edges are re-evaluated only when "
+                                  "popped; fewer evaluations, somewhat higher error), balanced (every edge around a collapse "
+                                  "re-evaluated at once), best (today the same as balanced); every preset keeps every guarantee")
+                      ->check(CLI::IsMember({"fast", "balanced", "best"}))
+                      ->capture_default_str();
+  from->excludes(quality);
   sub->add_flag("--no-measure", args->no_measure, "Skip measuring the Hausdorff and RMS distance between input and output");
   auto* regions = sub->add_option("--report-regions", args->regions,
                                   "Report the regions of the output farther from the input than E (object units, or % of the "
@@ -204,6 +212,7 @@ void add_meshreduce(CLI::App& app, Context& ctx) {
       o.max_aspect_ratio = args->max_aspect_ratio;
       o.lock_boundary = args->lock_boundary;
       o.lock_groups = args->lock_groups;
+      o.quality = args->quality == "fast" ? ReduceQuality::fast : args->quality == "best" ? ReduceQuality::best : ReduceQuality::balanced;
       const bool by_error = !args->error.empty();
       if (by_error) {
         o.max_error = error_target.percent ? error_target.value * 0.01 * diagonal : error_target.value;
@@ -236,6 +245,7 @@ void add_meshreduce(CLI::App& app, Context& ctx) {
                 {"target_reached", r.target_reached},
                 {"collapses", r.collapses},
                 {"seconds", r.seconds},
+                {"quality", args->quality},
                 {"bounding_box_diagonal", diagonal},
                 {"rejected", r.rejected}};
       if (locked) report["locked_vertices"] = r.locked_vertices;

@@ -410,6 +410,7 @@ void CollapseLoop::apply(const Candidate& c) {
   }
   for (auto h : mesh_.voh_range(w)) {
     const auto e = mesh_.edge_handle(h);
+    if (options_.lazy && hpos_[ix(e.idx())] >= 0) continue;  // re-evaluated when popped
     Candidate n;
     if (evaluate(e, n)) {
       heap_set(e.idx(), key_of(n));
@@ -417,7 +418,10 @@ void CollapseLoop::apply(const Candidate& c) {
       heap_remove(e.idx());
     }
   }
-  // Edges refused before may be legal now that their neighbourhood changed.
+  // Edges refused before may be legal now that their neighbourhood changed (also with lazy
+  // keys: leaving them out until they are around a kept vertex saved 5 % of the
+  // instructions but let a face on the bricks turn 25 degrees past perpendicular over
+  // several collapses, each within the flip test).
   for (auto n : mesh_.vv_range(w)) {
     for (auto h : mesh_.voh_range(n)) {
       const auto e = mesh_.edge_handle(h);

@@ -106,6 +106,7 @@ Mesh reduce_mesh(const Mesh& input, const ReduceOptions& options, ReduceReport* 
     lo.target_faces = options.target_faces;
     lo.has_uvs = has_uvs(mesh);
     lo.boundary_weight = options.boundary_weight;
+    lo.lazy = options.quality == ReduceQuality::fast;
     CollapseLoop loop(mesh, lo);
     if (progressive) loop.record(progressive);
     // Locks first: the cheapest test, and the one that explains a target out of reach.

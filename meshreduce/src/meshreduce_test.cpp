@@ -569,6 +569,139 @@ TEST(MeshReduce, SameInputGivesTheSameBytes) {
   EXPECT_TRUE(same_bytes(reduce_mesh(high, o), reduce_mesh(high, o)));
 }
 
+// ---- quality presets ----
+
+const ReduceQuality kQualities[] = {ReduceQuality::fast, ReduceQuality::balanced, ReduceQuality::best};
+
+const char* name_of(ReduceQuality q) { return q == ReduceQuality::fast ? "fast" : q == ReduceQuality::best ? "best" : "balanced"; }
+
+// Every preset keeps every guarantee: the face count, no flips (every face faces out of the
+// wall's cylinder), no needles, valid UVs, a manifold outline (each vertex has at most one
+// boundary gap), and the same bytes on a second run.
+TEST(MeshReduce, EveryPresetKeepsTheGuaranteesOnTheBrickWall) {
+  BrickWallOptions w;
+  w.columns = 128;
+  w.rows = 64;
+  const Mesh high = make_brick_wall(w);
+  for (const ReduceQuality q : kQualities) {
+    SCOPED_TRACE(name_of(q));
+    ReduceOptions o;
+    o.target_faces = 800;
+    o.quality = q;
+    ReduceReport r;
+    const Mesh low = reduce_mesh(high, o, &r);
+    EXPECT_LE(low.n_faces(), 800u);
+    EXPECT_GE(low.n_faces(), 790u);
+    EXPECT_TRUE(r.target_reached);
+    ASSERT_TRUE(has_uvs(low));
+    for (auto f : low.faces()) {
+      const auto hs = face_halfedges(low, f);
+      Vec3f centre(0, 0, 0);
+      for (auto h : hs) centre += low.point(low.to_vertex_handle(h)) / 3.0f;
+      EXPECT_GT(OpenMesh::dot(face_normal(low, f), Vec3f(centre[0], 0, centre[2] + w.bend_radius)), 0.0f) << "face " << f.idx();
+      const Vec3f a = low.point(low.to_vertex_handle(hs[0])), b = low.point(low.to_vertex_handle(hs[1])),
+                  c = low.point(low.to_vertex_handle(hs[2]));
+      const float longest = std::max({(b - a).sqrnorm(), (c - b).sqrnorm(), (a - c).sqrnorm()});
+      EXPECT_LE(longest * std::sqrt(3.0f) / (2.0f * face_normal(low, f).norm()), o.max_aspect_ratio) << "face " << f.idx();
+      EXPECT_GT(uv_double_area(low, f), 0.0f) << "face " << f.idx();
+    }
+    for (auto v : low.vertices()) {
+      size_t gaps = 0;
+      for (auto h : low.voh_range(v)) gaps += low.is_boundary(h);
+      EXPECT_LE(gaps, 1u) << "non-manifold vertex " << v.idx();
+    }
+    // Within the relief of the cylinder (optimal placement may leave the surface a little).
+    for (auto v : low.vertices()) {
+      const Vec3f p = low.point(v);
+      const float radius = std::hypot(p[0], p[2] + w.bend_radius);
+      EXPECT_GE(radius, w.bend_radius - 0.2f * w.amplitude);
+      EXPECT_LE(radius, w.bend_radius + 1.6f * w.amplitude);
+    }
+    EXPECT_TRUE(same_bytes(low, reduce_mesh(high, o))) << "deterministic";
+  }
+}
+
+// best is today the same as balanced (meshreduce.hpp): bit for bit.
+TEST(MeshReduce, BestIsBalancedToday) {
+  BrickWallOptions w;
+  w.columns = 64;
+  w.rows = 32;
+  const Mesh high = make_brick_wall(w);
+  ReduceOptions o;
+  o.target_faces = 300;
+  const Mesh balanced = reduce_mesh(high, o);
+  o.quality = ReduceQuality::best;
+  EXPECT_TRUE(same_bytes(balanced, reduce_mesh(high, o)));
+}
+
+// fast trades error for evaluations: on the sphere and on the bricks its Hausdorff distance
+// stays within 1.5 times balanced's (measured: about 1.0-1.3 times, docs/benchmarks.md).
+TEST(MeshReduce, FastErrorIsWithinAFactorOfBalanced) {
+  BrickWallOptions w;
+  w.columns = 128;
+  w.rows = 64;
+  const Mesh meshes[] = {make_icosphere(5), make_brick_wall(w)};
+  for (const Mesh& in : meshes) {
+    ReduceOptions o;
+    o.target_faces = 1000;
+    const SurfaceDistance balanced = measure(in, reduce_mesh(in, o));
+    o.quality = ReduceQuality::fast;
+    ReduceReport r;
+    const Mesh out = reduce_mesh(in, o, &r);
+    EXPECT_TRUE(r.target_reached);
+    EXPECT_LE(out.n_faces(), 1000u);
+    const SurfaceDistance fast = measure(in, out);
+    EXPECT_LE(fast.hausdorff, 1.5 * balanced.hausdorff) << "fast " << fast.hausdorff << ", balanced " << balanced.hausdorff;
+    EXPECT_LE(fast.rms, 1.5 * balanced.rms) << "fast " << fast.rms << ", balanced " << balanced.rms;
+  }
+}
+
+// fast keeps seams (on the seam line, on both sides) and locks like balanced.
+TEST(MeshReduce, FastKeepsSeamsAndLocks) {
+  const Mesh cylinder = test::make_parametric(
+      64, 32, [](double s, double t) { return Vec3f(float(std::cos(2 * M_PI * s)), float(std::sin(2 * M_PI * s)), float(t)); }, true,
+      false);
+  ReduceOptions o;
+  o.target_faces = 400;
+  o.quality = ReduceQuality::fast;
+  const Mesh out = reduce_mesh(cylinder, o);
+  EXPECT_LE(out.n_faces(), 400u);
+  size_t seam_vertices = 0;
+  for (auto f : out.faces()) EXPECT_GT(uv_double_area(out, f), 0.0f) << "face " << f.idx();
+  for (auto v : out.vertices()) {
+    bool u0 = false, u1 = false;
+    for (auto h : out.vih_range(v)) {
+      if (out.is_boundary(h)) continue;
+      u0 |= out.texcoord2D(h)[0] == 0.0f;
+      u1 |= out.texcoord2D(h)[0] == 1.0f;
+    }
+    if (!u0 && !u1) continue;
+    EXPECT_TRUE(u0 && u1) << "seam vertex with one side only";
+    EXPECT_EQ(out.point(v)[0], 1.0f);
+    EXPECT_EQ(out.point(v)[1], 0.0f);
+    ++seam_vertices;
+  }
+  EXPECT_GE(seam_vertices, 2u);
+  // A locked boundary stays bit for bit.
+  const Mesh grid = test::make_grid(24, 24);
+  ReduceOptions l;
+  l.target_faces = 20;
+  l.lock_boundary = true;
+  l.quality = ReduceQuality::fast;
+  ReduceReport r;
+  const Mesh locked = reduce_mesh(grid, l, &r);
+  EXPECT_FALSE(r.target_reached);
+  EXPECT_EQ(r.locked_vertices, 96u);
+  std::vector<std::array<float, 3>> before, after;
+  for (auto v : grid.vertices())
+    if (grid.is_boundary(v)) before.push_back({grid.point(v)[0], grid.point(v)[1], grid.point(v)[2]});
+  for (auto v : locked.vertices())
+    if (locked.is_boundary(v)) after.push_back({locked.point(v)[0], locked.point(v)[1], locked.point(v)[2]});
+  std::sort(before.begin(), before.end());
+  std::sort(after.begin(), after.end());
+  EXPECT_TRUE(before == after);
+}
+
 // ---- the measure ----
 
 TEST(SurfaceDistance, KnownDistances) {

@@ -57,9 +57,10 @@ void expect_same_mesh(const Mesh& a, const Mesh& b, const std::string& what) {
 // The required property: level k of the record equals reducing the input directly to k,
 // for the input itself, the first single collapses, levels in between, the final count and,
 // when the record ran until no collapse was legal, below it (both stop at the final count).
-void check_levels(const Mesh& in, size_t final_target) {
+void check_levels(const Mesh& in, size_t final_target, ReduceQuality quality = ReduceQuality::balanced) {
   ReduceOptions o;
   o.target_faces = final_target;
+  o.quality = quality;
   ProgressiveMesh pm;
   ReduceReport r;
   const Mesh reduced = reduce_mesh(in, o, &r, null_progress(), &pm);
@@ -74,6 +75,7 @@ void check_levels(const Mesh& in, size_t final_target) {
   for (const size_t k : levels) {
     ReduceOptions ok;
     ok.target_faces = k;
+    ok.quality = quality;
     size_t replayed = 0;
     const Mesh level = progressive_level(pm, k, &replayed);
     expect_same_mesh(reduce_mesh(in, ok), level, "level " + std::to_string(k));
@@ -82,6 +84,15 @@ void check_levels(const Mesh& in, size_t final_target) {
 }
 
 TEST(Progressive, LevelsEqualDirectReductionWithUvsAndGroups) { check_levels(make_torus(48, 24), 120); }
+
+// The fast preset's lazy keys change the order of the collapses, not the record's replay.
+TEST(Progressive, LevelsEqualDirectReductionWithTheFastPreset) {
+  check_levels(make_torus(48, 24), 120, ReduceQuality::fast);
+  BrickWallOptions w;
+  w.columns = 48;
+  w.rows = 24;
+  check_levels(make_brick_wall(w), 100, ReduceQuality::fast);
+}
 
 // Relief, a boundary (collapses that close boundary triangles move boundary halfedges into
 // faces) and one UV chart.

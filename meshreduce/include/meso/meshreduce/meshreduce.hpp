@@ -21,6 +21,17 @@ namespace meso {
 
 struct ProgressiveMesh;  // progressive.hpp
 
+// Speed against error (--quality). Every preset keeps every guarantee of reduce_mesh below.
+//  - balanced (the default): one indexed heap of edges; after each collapse every edge around
+//    the kept vertex is re-evaluated (its placement and cost from the merged quadric).
+//  - fast: the same collapses are allowed, but with lazy keys: queued edges around the kept
+//    vertex keep their old key until popped, when they are re-evaluated and collapsed, or
+//    queued again if the key rose. Fewer evaluations per collapse; the order is no longer
+//    exactly cheapest-first, so the error is somewhat higher (docs/benchmarks.md).
+//  - best: today the same as balanced (bit-identical output): the variants tried so far did
+//    not lower the measured error on the bench meshes (docs/benchmarks.md).
+enum class ReduceQuality { fast, balanced, best };
+
 struct ReduceOptions {
   // Targets. Reduction stops at the first one met; at least one must be set.
   size_t target_faces = 0;  // stop at this many faces (or the closest reachable count)
@@ -59,6 +70,8 @@ struct ReduceOptions {
   // false).
   bool lock_boundary = false;
   std::vector<std::string> lock_groups;
+
+  ReduceQuality quality = ReduceQuality::balanced;
 };
 
 struct ReduceReport {
