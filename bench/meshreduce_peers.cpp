@@ -4,7 +4,10 @@
 //
 //   build/release/bench/meshreduce_peers                       # bricks + smooth torus, 10 %, 1 %, 0.1 %
 //   build/release/bench/meshreduce_peers --ratios 0.1,0.01 --mesh high.obj --only-files
+//   build/release/bench/meshreduce_peers --presets fast,balanced --no-cgal --no-blender --no-meshlab
 //
+// meso runs once per --quality preset (--presets, default fast,balanced,best), each row
+// naming it in the preset column.
 // Inputs: the bundled brick wall (262,144 triangles, one UV chart), a smooth analytic
 // torus (262,144 triangles, UV seams along both wrap lines), and any --mesh files. meso runs
 // twice: on the mesh with its UVs (seams kept, as the pipeline uses it) and, "no UVs", on the
@@ -79,6 +82,7 @@ double now() { return std::chrono::duration<double>(std::chrono::steady_clock::n
 
 struct Row {
   std::string method;
+  std::string preset = "–";  // meso's --quality
   size_t faces = 0;
   double seconds = 0;
   SurfaceDistance d;
@@ -189,14 +193,16 @@ void finish(Row& r, const TriangleSoup& input, const TriangleSoup& output) {
 }
 
 Row run_meso(const std::string& method, const Mesh& in, const TriangleSoup& input, size_t target, int repeat,
-             const ReduceOptions& base) {
+             const ReduceOptions& base, const std::string& preset) {
   Row r;
   r.method = method;
+  r.preset = preset;
   r.seconds = 1e30;
   Mesh out;
   for (int i = 0; i < repeat; ++i) {
     ReduceOptions o = base;
     o.target_faces = target;
+    o.quality = preset == "fast" ? ReduceQuality::fast : preset == "best" ? ReduceQuality::best : ReduceQuality::balanced;
     const double t0 = now();
     out = reduce_mesh(in, o);
     r.seconds = std::min(r.seconds, now() - t0);
@@ -411,7 +417,8 @@ int main(int argc, char** argv) {
   std::vector<double> ratios = {0.1, 0.01, 0.001};
   std::vector<std::string> files;
   int repeat = 1;
-  bool builtin = true, use_blender = true, use_meshlab = true;
+  bool builtin = true, use_blender = true, use_meshlab = true, use_cgal = true;
+  std::vector<std::string> presets = {"fast", "balanced", "best"};
   std::string blender = "blender", blender_script = MESO_BENCH_DIR "/meshreduce_blender.py";
   ReduceOptions base;
   for (int i = 1; i < argc; ++i) {
@@ -443,11 +450,24 @@ int main(int argc, char** argv) {
       use_blender = false;
     } else if (a == "--no-meshlab") {
       use_meshlab = false;
+    } else if (a == "--no-cgal") {
+      use_cgal = false;
+    } else if (a == "--presets") {
+      presets.clear();
+      std::stringstream list(value());
+      for (std::string p; std::getline(list, p, ',');) {
+        if (p != "fast" && p != "balanced" && p != "best") {
+          std::fprintf(stderr, "--presets: %s is not fast, balanced or best\n", p.c_str());
+          return 2;
+        }
+        presets.push_back(p);
+      }
     } else {
       std::fprintf(stderr,
                    "usage: meshreduce_peers [--ratios 0.1,0.01,0.001] [--mesh FILE]... [--only-files] [--repeat N]\n"
                    "                        [--max-normal-deviation DEG] [--max-aspect-ratio R]\n"
-                   "                        [--blender BIN] [--blender-script PY] [--no-blender] [--no-meshlab]\n");
+                   "                        [--blender BIN] [--blender-script PY] [--no-blender] [--no-meshlab] [--no-cgal]\n"
+                   "                        [--presets fast,balanced,best]\n");
       return 2;
     }
   }
@@ -474,9 +494,9 @@ int main(int argc, char** argv) {
   }
   for (const auto& f : files) meshes.emplace_back(f, read_mesh(f));
 
-  std::printf("| mesh | input faces | target | method | faces | seconds | Hausdorff %% diag | RMS %% diag | time ÷ meshopt | "
+  std::printf("| mesh | input faces | target | method | preset | faces | seconds | Hausdorff %% diag | RMS %% diag | time ÷ meshopt | "
               "Hausdorff ÷ best peer | flipped | degenerate | non-manifold |\n");
-  std::printf("|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  std::printf("|---|---:|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
   std::fflush(stdout);
   for (const auto& [name, mesh] : meshes) {
     const double diag = bounding_box(mesh).diagonal();
@@ -490,10 +510,12 @@ int main(int argc, char** argv) {
     for (const double ratio : ratios) {
       const size_t target = static_cast<size_t>(std::llround(ratio * static_cast<double>(mesh.n_faces())));
       std::vector<Row> rows;
-      rows.push_back(run_meso("meso", mesh, input, target, repeat, base));
-      rows.push_back(run_meso("meso, no UVs", plain, input, target, repeat, base));
+      for (const auto& preset : presets) {
+        rows.push_back(run_meso("meso", mesh, input, target, repeat, base, preset));
+        rows.push_back(run_meso("meso, no UVs", plain, input, target, repeat, base, preset));
+      }
       rows.push_back(run_meshopt(input, target, repeat));
-      rows.push_back(run_cgal(input, target, repeat));
+      if (use_cgal) rows.push_back(run_cgal(input, target, repeat));
       if (use_blender) rows.push_back(run_blender(blender, blender_script, obj, work, input, target, repeat));
       if (use_meshlab)
         for (const bool careful : {false, true}) rows.push_back(run_meshlab(off, work, input, target, repeat, careful, meshlab_load));
@@ -505,13 +527,13 @@ int main(int argc, char** argv) {
       }
       for (const Row& r : rows) {
         if (!r.ok) {
-          std::printf("| %s | %zu | %zu (%.3g %%) | %s | – | – | – | – | – | – | – | – | – |\n", name.c_str(), mesh.n_faces(), target,
-                      100 * ratio, r.method.c_str());
+          std::printf("| %s | %zu | %zu (%.3g %%) | %s | %s | – | – | – | – | – | – | – | – | – |\n", name.c_str(), mesh.n_faces(), target,
+                      100 * ratio, r.method.c_str(), r.preset.c_str());
           std::fprintf(stderr, "meshreduce_peers: %s at %zu faces: %s\n", r.method.c_str(), target, r.note.c_str());
           continue;
         }
-        std::printf("| %s | %zu | %zu (%.3g %%) | %s | %zu | %.3f | %.4f | %.5f | %.2f | %.2f | %zu | %zu | %zu |\n", name.c_str(),
-                    mesh.n_faces(), target, 100 * ratio, r.method.c_str(), r.faces, r.seconds, 100 * r.d.hausdorff / diag,
+        std::printf("| %s | %zu | %zu (%.3g %%) | %s | %s | %zu | %.3f | %.4f | %.5f | %.2f | %.2f | %zu | %zu | %zu |\n", name.c_str(),
+                    mesh.n_faces(), target, 100 * ratio, r.method.c_str(), r.preset.c_str(), r.faces, r.seconds, 100 * r.d.hausdorff / diag,
                     100 * r.d.rms / diag, r.seconds / meshopt, r.d.hausdorff / best_peer, r.flipped, r.degenerate, r.non_manifold);
       }
       std::fflush(stdout);

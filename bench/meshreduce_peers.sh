@@ -7,7 +7,10 @@
 #   bench/meshreduce_peers.sh [BUILD_DIR]      (default build/release)
 # Peers that are missing are skipped with a message (apt-get install -y libmeshoptimizer-dev
 # blender meshlab xvfb; meshoptimizer needs a reconfigure). Environment: RATIOS (default
-# 0.1,0.01,0.001), REPEAT (default 1), NO_BUILD=1 (use the binaries in BUILD_DIR as they are).
+# 0.1,0.01,0.001), REPEAT (default 1), NO_BUILD=1 (use the binaries in BUILD_DIR as they are),
+# PRESETS (meso's --quality presets, default fast,balanced,best), PEER_ARGS (more options of
+# meshreduce_peers, e.g. "--no-cgal --no-blender --no-meshlab" to rerun meso and meshoptimizer
+# only), NO_ERROR_RUNS=1 (skip the --error runs at the end).
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 build=${1:-build/release}
@@ -16,7 +19,9 @@ for p in blender meshlabserver xvfb-run; do
 done
 [ -f /usr/include/meshoptimizer.h ] || echo "meshreduce_peers: libmeshoptimizer-dev not installed; its peer is skipped" >&2
 [ -n "${NO_BUILD:-}" ] || cmake --build "$build" -j1 --target meshreduce_peers meso meso-example
-"$build/bench/meshreduce_peers" --ratios "${RATIOS:-0.1,0.01,0.001}" --repeat "${REPEAT:-1}"
+# shellcheck disable=SC2086  # PEER_ARGS is a list of options
+"$build/bench/meshreduce_peers" --ratios "${RATIOS:-0.1,0.01,0.001}" --repeat "${REPEAT:-1}" --presets "${PRESETS:-fast,balanced,best}" ${PEER_ARGS:-}
+[ -z "${NO_ERROR_RUNS:-}" ] || exit 0
 high=$(mktemp -d)/bricks_high.obj
 "$build/examples/meso-example" -o "$high"
 for e in 0.5% 0.1%; do

@@ -102,9 +102,10 @@ struct LoopOptions {
   // are queued keep their old keys instead of being re-evaluated. Every pop is re-evaluated
   // anyway (run()): a key that rose goes back into the heap, one that fell is collapsed at
   // once. Collapsing only merges quadrics and moves a vertex towards their minimum, so a key
-  // mostly rises, and most queued edges around a vertex are never popped before another
-  // collapse next to them changes them again: this saves most evaluations (about seven of
-  // eleven per collapse) at the price of edges whose key fell waiting their old turn.
+  // mostly rises, and many queued edges around a vertex are not popped before another
+  // collapse next to them changes them again: this skips the eager re-evaluations (about
+  // seven of the eleven per collapse), of which the re-pops give some back (on the bricks
+  // 13 % fewer instructions in all), at the price of edges whose key fell waiting their turn.
   bool lazy = false;
 };
 
