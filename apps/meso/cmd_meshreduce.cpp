@@ -137,7 +137,7 @@ void add_meshreduce(CLI::App& app, Context& ctx) {
   from->excludes(lock_group);
   auto* quality = sub->add_option("--quality", args->quality,
                                   "Speed against error: fast (lazy heap keys: queued edges are re-evaluated only when "
-                                  "popped; fewer evaluations, somewhat higher error), balanced (every edge around a collapse "
+                                  "popped; fewer evaluations, not strictly cheapest-first: errors about those of balanced), balanced (every edge around a collapse "
                                   "re-evaluated at once), best (today the same as balanced); every preset keeps every guarantee")
                       ->check(CLI::IsMember({"fast", "balanced", "best"}))
                       ->capture_default_str();

@@ -635,7 +635,7 @@ TEST(MeshReduce, BestIsBalancedToday) {
 }
 
 // fast trades error for evaluations: on the sphere and on the bricks its Hausdorff distance
-// stays within 1.5 times balanced's (measured: about 1.0-1.3 times, docs/benchmarks.md).
+// stays within 1.5 times balanced's (on the bench meshes: 0.91-1.00 times, docs/benchmarks.md).
 TEST(MeshReduce, FastErrorIsWithinAFactorOfBalanced) {
   BrickWallOptions w;
   w.columns = 128;
