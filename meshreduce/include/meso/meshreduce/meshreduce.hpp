@@ -28,7 +28,7 @@ struct ProgressiveMesh;  // progressive.hpp
 //    vertex keep their old key until popped, when they are re-evaluated and collapsed, or
 //    queued again if the key rose. Fewer evaluations per collapse (6-9 % fewer instructions
 //    on the bench meshes); the order is no longer exactly cheapest-first, which there gave
-//    Hausdorff distances equal to or a little below balanced's and RMS within 12 % of it
+//    Hausdorff distances within 0.2 % of or below balanced's and RMS within 12 % of it
 //    (docs/benchmarks.md).
 //  - best: today the same as balanced (bit-identical output): the variants tried so far did
 //    not lower the measured error on the bench meshes (docs/benchmarks.md).
