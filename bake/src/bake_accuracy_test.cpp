@@ -308,6 +308,27 @@ Mesh make_patches(int count, std::vector<Eigen::Vector3d>& normals, double grow 
   return m;
 }
 
+// Per texel of an n x n bake of make_patches: source, the chart whose value it holds (by its
+// object-space normal: every chart faces its own way), and touched, the chart whose UVs touch it
+// (rasterize_uv's faces, -1 for none); the two must agree where a chart touches.
+void chart_texels(const Mesh& mesh, const BakeResult& r, const std::vector<Eigen::Vector3d>& normals, const std::vector<int>& face_chart, int n,
+                  std::vector<int>& source, std::vector<int>& touched) {
+  source.assign(static_cast<size_t>(n) * n, -1);
+  for (size_t i = 0; i < source.size(); ++i) {
+    const Eigen::Vector3d v(r.normal_os.pixels[3 * i], r.normal_os.pixels[3 * i + 1], r.normal_os.pixels[3 * i + 2]);
+    for (size_t c = 0; c < normals.size(); ++c)
+      if (v.dot(normals[c]) > 0.9999) source[i] = static_cast<int>(c);
+    ASSERT_GE(source[i], 0) << "texel " << i << " holds no chart's normal";
+  }
+  const auto samples = rasterize_uv(mesh, n, n);
+  touched.assign(samples.size(), -1);
+  for (size_t i = 0; i < samples.size(); ++i)
+    if (samples[i].face >= 0) {
+      touched[i] = face_chart[static_cast<size_t>(samples[i].face)];
+      ASSERT_EQ(source[i], touched[i]) << "texel " << i;
+    }
+}
+
 // Padding across MIP levels. An atlas of 24 charts packed with padding P (pack_uv_charts),
 // baked over the same patches (slightly grown) with the bake's own dilation over the whole map: each texel's object-
 // space normal then names the chart its value came from (every chart faces its own way).
@@ -341,22 +362,9 @@ TEST(BakeAccuracy, DilatedPaddingKeepsChartsApartDownToMipLevelLog2OfHalfPPlusOn
     o.dilate = -1;  // the CLI's default: the whole map
     const BakeResult r = bake(mesh, high, o);
     ASSERT_EQ(r.misses, 0u);
-    // Which chart each texel's value came from, by its normal.
-    std::vector<int> source(static_cast<size_t>(n) * n, -1);
-    for (size_t i = 0; i < source.size(); ++i) {
-      const Eigen::Vector3d v(r.normal_os.pixels[3 * i], r.normal_os.pixels[3 * i + 1], r.normal_os.pixels[3 * i + 2]);
-      for (size_t c = 0; c < normals.size(); ++c)
-        if (v.dot(normals[c]) > 0.9999) source[i] = static_cast<int>(c);
-      ASSERT_GE(source[i], 0) << "texel " << i << " holds no chart's normal";
-    }
-    // Chart ids from the UV raster; they must agree with the values on covered texels.
-    const auto samples = rasterize_uv(mesh, n, n);
-    std::vector<int> touched(samples.size(), -1);
-    for (size_t i = 0; i < samples.size(); ++i)
-      if (samples[i].face >= 0) {
-        touched[i] = face_chart[static_cast<size_t>(samples[i].face)];
-        ASSERT_EQ(source[i], touched[i]) << "texel " << i;
-      }
+    std::vector<int> source, touched;
+    chart_texels(mesh, r, normals, face_chart, n, source, touched);
+    if (HasFatalFailure()) return;
     // The box-filtered chain and the check, level by level.
     Image level = r.normal_os;
     int levels_checked = 0;
@@ -438,17 +446,10 @@ TEST(BakeAccuracy, MipSafePackingKeepsBilinearReadsApartAndTheCheckerPredictsThe
     o.dilate = -1;
     const BakeResult r = bake(mesh, high, o);
     ASSERT_EQ(r.misses, 0u);
-    // Per level-0 texel: the chart whose value it holds (by its normal) and the chart touching it.
-    std::vector<int> source(static_cast<size_t>(n) * n, -1), touched(source.size(), -1);
-    for (size_t i = 0; i < source.size(); ++i) {
-      const Eigen::Vector3d v(r.normal_os.pixels[3 * i], r.normal_os.pixels[3 * i + 1], r.normal_os.pixels[3 * i + 2]);
-      for (size_t c = 0; c < normals.size(); ++c)
-        if (v.dot(normals[c]) > 0.9999) source[i] = static_cast<int>(c);
-      ASSERT_GE(source[i], 0);
-    }
-    const auto samples = rasterize_uv(mesh, n, n);
-    for (size_t i = 0; i < samples.size(); ++i)
-      if (samples[i].face >= 0) touched[i] = face_chart[static_cast<size_t>(samples[i].face)];
+    // Per level-0 texel: the chart whose value it holds and the chart touching it.
+    std::vector<int> source, touched;
+    chart_texels(mesh, r, normals, face_chart, n, source, touched);
+    if (HasFatalFailure()) return;
     UvCheckOptions co;
     co.size = n;
     co.overlay = false;

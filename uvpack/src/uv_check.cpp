@@ -49,12 +49,13 @@ void check_mip_levels(const std::vector<int>& touch, int size, int levels, UvChe
         holds[static_cast<size_t>(cy) * static_cast<size_t>(cn) + static_cast<size_t>(cx)] = h;
         touched[static_cast<size_t>(cy) * static_cast<size_t>(cn) + static_cast<size_t>(cx)] = t;
       }
-    // Which charts a mixed level-k texel holds, in increasing order.
-    auto charts_in = [&](int cx, int cy) {
+    // The distinct charts (>= 0, increasing) that `label` gives the level-0 texels of level-k
+    // texel (cx, cy): with owner, the charts whose values it holds; with touch, those touching it.
+    auto charts_in = [&](const std::vector<int>& label, int cx, int cy) {
       std::vector<int> cs;
       for (int y = cy * b; y < (cy + 1) * b; ++y)
         for (int x = cx * b; x < (cx + 1) * b; ++x) {
-          const int c = owner[static_cast<size_t>(y) * static_cast<size_t>(size) + static_cast<size_t>(x)];
+          const int c = label[static_cast<size_t>(y) * static_cast<size_t>(size) + static_cast<size_t>(x)];
           if (c >= 0) cs.push_back(c);
         }
       std::sort(cs.begin(), cs.end());
@@ -69,25 +70,15 @@ void check_mip_levels(const std::vector<int>& touch, int size, int levels, UvChe
       for (int cx = 0; cx < cn; ++cx) {
         const int t = touched[static_cast<size_t>(cy) * static_cast<size_t>(cn) + static_cast<size_t>(cx)];
         if (t == -1) continue;
-        std::vector<int> readers{t};
-        if (t == kMixed) {
-          // Several charts touch it: each of them reads its neighbourhood.
-          readers.clear();
-          for (int y = cy * b; y < (cy + 1) * b; ++y)
-            for (int x = cx * b; x < (cx + 1) * b; ++x) {
-              const int c = touch[static_cast<size_t>(y) * static_cast<size_t>(size) + static_cast<size_t>(x)];
-              if (c >= 0) readers.push_back(c);
-            }
-          std::sort(readers.begin(), readers.end());
-          readers.erase(std::unique(readers.begin(), readers.end()), readers.end());
-        }
+        // Several charts touching it: each of them reads its neighbourhood.
+        const std::vector<int> readers = t == kMixed ? charts_in(touch, cx, cy) : std::vector<int>{t};
         for (int ny = std::max(0, cy - 1); ny <= std::min(cn - 1, cy + 1); ++ny)
           for (int nx = std::max(0, cx - 1); nx <= std::min(cn - 1, cx + 1); ++nx) {
             const size_t ni = static_cast<size_t>(ny) * static_cast<size_t>(cn) + static_cast<size_t>(nx);
             const int h = holds[ni];
             for (int reader : readers) {
               if (h == reader) continue;
-              for (int other : h == kMixed ? charts_in(nx, ny) : std::vector<int>{h})
+              for (int other : h == kMixed ? charts_in(owner, nx, ny) : std::vector<int>{h})
                 if (other >= 0 && other != reader) hits.emplace_back(ni, reader, other);
             }
           }
