@@ -124,7 +124,7 @@ BENCHMARK(BM_ConeMap)
 void BM_ConeMapBruteForce(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
   const HeightField f = cone_input(static_cast<int>(state.range(1)), n);
-  const std::vector<float>& h = f.height.pixels;
+  const auto& h = f.height.pixels;
   std::vector<float> ratio(h.size());
   for (auto _ : state) {
     for (int p = 0; p < n * n; ++p) {

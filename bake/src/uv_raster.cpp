@@ -96,11 +96,11 @@ std::vector<TexelSample> UvRasterizer::rows(int row0, int row1) const {
   return out;
 }
 
-std::vector<TexelSample> rasterize_uv(const Mesh& mesh, int width, int height) {
+LargeVector<TexelSample> rasterize_uv(const Mesh& mesh, int width, int height) {
   // Bands of rows in parallel: a texel's sample depends only on the faces in face order,
   // not on the band it is computed in.
   const UvRasterizer raster(mesh, width, height);
-  std::vector<TexelSample> out(static_cast<size_t>(std::max(width, 0)) * static_cast<size_t>(std::max(height, 0)));
+  LargeVector<TexelSample> out(static_cast<size_t>(std::max(width, 0)) * static_cast<size_t>(std::max(height, 0)));
   tbb::parallel_for(tbb::blocked_range<int>(0, std::max(height, 0), 8), [&](const tbb::blocked_range<int>& band) {
     const std::vector<TexelSample> rows = raster.rows(band.begin(), band.end());
     std::copy(rows.begin(), rows.end(), out.begin() + static_cast<std::ptrdiff_t>(static_cast<size_t>(band.begin()) * static_cast<size_t>(width)));

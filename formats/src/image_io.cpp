@@ -18,7 +18,7 @@ namespace {
 constexpr const char* kPrefix = "meso:";
 
 template <typename T>
-std::vector<T> quantize(const std::vector<float>& px, float max_value) {
+std::vector<T> quantize(const LargeVector<float>& px, float max_value) {
   std::vector<T> out(px.size());
   for (size_t i = 0; i < px.size(); ++i) {
     const float v = std::clamp(px[i], 0.0f, 1.0f);

@@ -99,7 +99,7 @@ DistanceField build_distance_field(const HeightField& field, const DistanceField
 
 Image distance_field_image(const DistanceField& field, const HeightField& source) {
   Image img(field.width, field.height * field.depth, 1);
-  img.pixels = field.distance;
+  img.pixels.assign(field.distance.begin(), field.distance.end());
   img.metadata = height_field_metadata(source);
   img.metadata["quantity"] = std::string("distance field");
   img.metadata["channels"] = std::string("Y = distance from the voxel centre to the solid under the filtered height surface, units of u");

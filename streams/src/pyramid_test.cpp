@@ -22,7 +22,7 @@ TEST(HeightField, NormalisesWithScaleAndBias) {
   const HeightField f = make_height_field(img, Border::clamp);
   EXPECT_EQ(f.bias, -0.5f);
   EXPECT_EQ(f.scale, 2.0f);
-  EXPECT_EQ(f.height.pixels, (std::vector<float>{0.0f, 0.25f, 1.0f}));
+  EXPECT_EQ(f.height.pixels, (LargeVector<float>{0.0f, 0.25f, 1.0f}));
   const HeightField flat = make_height_field(Image(4, 4, 1, 7.0f), Border::wrap);
   EXPECT_EQ(flat.bias, 7.0f);
   EXPECT_EQ(flat.scale, 0.0f);

@@ -2,6 +2,7 @@
 // layout (see image.hpp for the texel/UV convention).
 #pragma once
 
+#include "meso/core/huge_pages.hpp"
 #include "meso/core/mesh.hpp"
 
 #include <array>
@@ -25,7 +26,7 @@ struct TexelSample {
 //     whatever the share of the texel the triangle covers; the ring beyond, which bilinear
 //     lookups at the chart's edge also read, is filled by dilation.
 // Faces with zero UV area cover nothing. Row-major, top row first.
-std::vector<TexelSample> rasterize_uv(const Mesh& mesh, int width, int height);
+LargeVector<TexelSample> rasterize_uv(const Mesh& mesh, int width, int height);
 
 // The same rules, a band of rows at a time: the faces' UV triangles are prepared once, and
 // rows(y0, y1) returns rows [y0, y1) of rasterize_uv's result (row-major, y0 first) without

@@ -9,6 +9,8 @@
 // into and read from the file header (EXR attributes, PNG text chunks).
 #pragma once
 
+#include "meso/core/huge_pages.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
@@ -26,7 +28,7 @@ struct Image {
   int width = 0;
   int height = 0;
   int channels = 0;
-  std::vector<float> pixels;  // width * height * channels, row-major, top row first
+  LargeVector<float> pixels;  // width * height * channels, row-major, top row first
   ImageMetadata metadata;
 
   Image() = default;
