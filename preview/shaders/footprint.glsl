@@ -57,6 +57,27 @@ ivec2 grid_cell(vec2 p, vec2 d) {
 // polynomial (corners on the half-texel grid), so S(ray(t)) - z(t) is a quadratic in t.
 bool footprint_hit(ivec2 cell, vec3 o, vec3 d, float t0, float t1, out float t_hit) {
   t_hit = t1;
+  // S on the footprint's half-texel grid, g[3 b + a] at (i + a/2, j + b/2), from the 3 x 3
+  // texels around it, each fetched once (9 fetches, where the pieces' corners evaluated one
+  // by one would take up to 48). The same arithmetic as grid_surface() at those points (a
+  // texel centre's weight is 1, an edge's 1/2 and 1/2; x first, then y), so the same values.
+  float h[9];
+  for (int b = 0; b < 3; ++b)
+    for (int a = 0; a < 3; ++a) h[3 * b + a] = grid_height(cell + ivec2(a - 1, b - 1));
+  float g[9];
+  for (int b = 0; b < 3; ++b) {
+    // y = j + b/2 lies between texel rows r0 and r0 + 1 of the 3 x 3 (weight wy on the
+    // second): rows 0-1 at the top edge, 1-2 with weight 0 at the centre, 1-2 at the bottom.
+    int r0 = b == 0 ? 0 : 1;
+    float wy = b == 1 ? 0.0 : 0.5;
+    for (int a = 0; a < 3; ++a) {
+      int c0 = a == 0 ? 0 : 1;
+      float wx = a == 1 ? 0.0 : 0.5;
+      float top = h[3 * r0 + c0] * (1.0 - wx) + h[3 * r0 + c0 + 1] * wx;
+      float bottom = h[3 * r0 + 3 + c0] * (1.0 - wx) + h[3 * r0 + 3 + c0 + 1] * wx;
+      g[3 * b + a] = top * (1.0 - wy) + bottom * wy;
+    }
+  }
   float cx = kConeFar, cy = kConeFar;
   if (d.x != 0.0) cx = (float(cell.x) + 0.5 - o.x) / d.x;
   if (d.y != 0.0) cy = (float(cell.y) + 0.5 - o.y) / d.y;
@@ -67,10 +88,10 @@ bool footprint_hit(ivec2 cell, vec3 o, vec3 d, float t0, float t1, out float t_h
     if (k > 0 && !(tb > ta)) continue;  // empty stretch (the first one is kept: t0 may equal t1)
     float tm = 0.5 * (ta + tb);
     vec2 m = clamp(o.xy + tm * d.xy, vec2(cell), vec2(cell) + 1.0);
-    vec2 pc = vec2(m.x < float(cell.x) + 0.5 ? float(cell.x) : float(cell.x) + 0.5,
-                   m.y < float(cell.y) + 0.5 ? float(cell.y) : float(cell.y) + 0.5);
-    float v00 = grid_surface(pc), v10 = grid_surface(pc + vec2(0.5, 0.0));
-    float v01 = grid_surface(pc + vec2(0.0, 0.5)), v11 = grid_surface(pc + vec2(0.5, 0.5));
+    int ax = m.x < float(cell.x) + 0.5 ? 0 : 1, ay = m.y < float(cell.y) + 0.5 ? 0 : 1;
+    vec2 pc = vec2(cell) + 0.5 * vec2(ax, ay);
+    float v00 = g[3 * ay + ax], v10 = g[3 * ay + ax + 1];
+    float v01 = g[3 * ay + ax + 3], v11 = g[3 * ay + ax + 4];
     float pa = v10 - v00, pb = v01 - v00, pe = v00 - v10 - v01 + v11;
     // Local coordinates (s, r) in [0, 1]^2 over the piece; the parameter is tau = t - ta,
     // measured from the stretch's start to keep the coefficients small.

@@ -2,10 +2,11 @@
 // Sphere tracing (survey 4.3.4) on meso streams sdf (streams/distance_field.hpp).
 // Returns the visible point's s (object length along the view ray from the base point).
 float sphere_trace(vec3 dir) {
+  if (!(u_sdf_scale > 0.0)) return u_sdf_bias / dir.z;  // a flat map: the plane h = bias
   // Section 4.3.4 on meso's distance field (streams/distance_field.hpp): in its space the
   // point is (u, v H/W, normalised height * relief), distances in units of u. March from the
   // top of the box by the stored distance until it vanishes.
-  float span = max(u_sdf_scale, 1e-20);
+  float span = u_sdf_scale;
   vec3 D = vec3(dir.x, dir.y * u_sdf_aspect, dir.z * u_sdf_relief / span);  // per unit s
   float len = length(D);
   // Trilinear filtering blends the 8 voxel centres around a point, and the field is exact
@@ -14,31 +15,42 @@ float sphere_trace(vec3 dir) {
   float s = (u_sdf_bias + u_sdf_scale) / dir.z;  // where the ray enters the top (h = bias + scale)
   // The field measures the distance to S', boxes as high as the highest point over their
   // texel, which can float above the surface: where it allows no step (within a margin of
-  // S'), march a quarter margin at a time watching the true surface, resuming sphere steps
-  // where the field opens up again, and finish with a secant step at the crossing (a
-  // combined method, section 4.4). Every pass of the loop counts against the budget.
-  float ds = 0.25 * u_sdf_margin / len;
-  bool marching = false;  // the previous pass was a march step from s_prev, d_prev above the surface
-  float s_prev = s, d_prev = 0.0;
+  // S'), the ray is intersected exactly with the filtered surface over the texel it is in
+  // (footprint.glsl, as the cone and pyramid tracers do) and, when it passes over it, moves
+  // on to the texel's exit, where sphere steps resume if the field opens up again. So no
+  // crossing is ever stepped over (a safe method, section 4.3), whatever the slice count.
+  // Every pass of the loop counts against the budget.
+  // The ray in footprint.glsl's pixel units, parametrised by s itself: o + s d.
+  vec2 n = vec2(textureSize(u_height, 0));
+  vec3 o = vec3(v_uv.x * n.x, (1.0 - v_uv.y) * n.y, -u_sdf_bias / span);
+  vec3 d = vec3(dir.x * n.x, -dir.y * n.y, dir.z / span);
+  float s_floor = u_sdf_bias / dir.z;  // normalised height 0, below every point of the surface
+  // After a texel without a crossing, the texel ahead (tracked, as cone_trace does, so that
+  // rounding at the shared edge cannot send the ray back into the texel it left).
+  bool walking = false;
+  ivec2 cell = ivec2(0);
   for (int i = 0; i < max(u_iterations, 1); ++i) {
     vec2 p = v_uv + dir.xy * s;
     float z = (dir.z * s - u_sdf_bias) / span;  // normalised height
+    if (z <= 0.0) return s_floor;
     ++g_fetches;
     float step = textureLod(u_sdf, vec3(p, clamp(z, 0.0, 1.0)), 0.0).r - u_sdf_margin;
-    if (step >= u_sdf_epsilon && z >= 0.0) {
+    if (step >= u_sdf_epsilon) {
       s += step / len;
-      marching = false;
+      walking = false;
       continue;
     }
-    float d = dir.z * s - height_at(p);  // ray height minus surface height
-    if (d <= 0.0) {
-      if (marching) s = s_prev + (s - s_prev) * clamp(d_prev / max(d_prev - d, 1e-20), 0.0, 1.0);
-      break;
-    }
-    marching = true;
-    s_prev = s;
-    d_prev = d;
-    s += ds;
+    if (!walking) cell = grid_cell((o + s * d).xy, d.xy);
+    float tx = d.x > 0.0 ? (float(cell.x + 1) - o.x) / d.x : (d.x < 0.0 ? (float(cell.x) - o.x) / d.x : kConeFar);
+    float ty = d.y > 0.0 ? (float(cell.y + 1) - o.y) / d.y : (d.y < 0.0 ? (float(cell.y) - o.y) / d.y : kConeFar);
+    float s_exit = max(min(min(tx, ty), s_floor), s);
+    float s_hit;
+    if (footprint_hit(cell, o, d, s, s_exit, s_hit)) return s_hit;
+    if (s_exit >= s_floor) return s_floor;
+    s = s_exit;
+    walking = true;
+    if (tx <= s_exit) cell.x += d.x > 0.0 ? 1 : -1;
+    if (ty <= s_exit) cell.y += d.y > 0.0 ? 1 : -1;
   }
   return s;
 }

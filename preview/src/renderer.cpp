@@ -770,10 +770,12 @@ void SurfaceRenderer::draw(const PreviewOptions& o, int width, int height) {
     glUniform1f(glGetUniformLocation(prog, "u_vdm_bias"), vdm_bias_);
     glUniform1f(glGetUniformLocation(prog, "u_vdm_aspect"), vdm_aspect_);
   }
-  // The method's stream: its normalisation and border.
-  glUniform1f(glGetUniformLocation(prog, "u_stream_scale"), pyramid ? pyramid_scale_ : cone_scale_[c]);
-  glUniform1f(glGetUniformLocation(prog, "u_stream_bias"), pyramid ? pyramid_bias_ : cone_bias_[c]);
-  glUniform1i(glGetUniformLocation(prog, "u_stream_wrap"), (pyramid ? pyramid_wrap_ : cone_wrap_[c]) ? 1 : 0);
+  // The method's stream: its normalisation and border (footprint.glsl reads the height map
+  // with them; sphere tracing's exact texel tests use the distance field's).
+  const bool sdf = o.method == "sphere-tracing";
+  glUniform1f(glGetUniformLocation(prog, "u_stream_scale"), sdf ? sdf_scale_ : pyramid ? pyramid_scale_ : cone_scale_[c]);
+  glUniform1f(glGetUniformLocation(prog, "u_stream_bias"), sdf ? sdf_bias_ : pyramid ? pyramid_bias_ : cone_bias_[c]);
+  glUniform1i(glGetUniformLocation(prog, "u_stream_wrap"), (sdf ? sdf_wrap_ : pyramid ? pyramid_wrap_ : cone_wrap_[c]) ? 1 : 0);
   const GLint ndc = glGetUniformLocation(prog, "u_ndc_transform");
   glUniform4f(ndc, 1.0f, 0.0f, 1.0f, 0.0f);
   glBindVertexArray(vao_);
