@@ -446,12 +446,12 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
     Eigen::Vector3d m(0, 0, 1);
     const Eigen::Vector3d hnd(hn[0], hn[1], hn[2]);
     const double det = tbn.determinant();
-    if (std::abs(det) > 1e-12 && hnd.norm() > 0) {
+    if (std::abs(det) > 1e-12 && hnd.squaredNorm() > 0) {
       m = tbn.inverse() * hnd;  // exact inverse of the decoder's matrix
-      if (m.norm() > 0) m.normalize();
+      if (m.squaredNorm() > 0) m.normalize();
       else m = Eigen::Vector3d(0, 0, 1);
     }
-    Eigen::Vector3d high_normal = hnd.norm() > 0 ? Eigen::Vector3d(hnd.normalized()) : dir;
+    Eigen::Vector3d high_normal = hnd.squaredNorm() > 0 ? Eigen::Vector3d(hnd.normalized()) : dir;
     double detail_height = 0;
     if (!part.uvs.empty()) {
       // The detail bump on the high surface (course notes, "Ray-caster"): its height adds to
@@ -491,7 +491,7 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
       }
       if (std::abs(det) > 1e-12) {
         m = tbn.inverse() * high_normal;
-        m = m.norm() > 0 ? Eigen::Vector3d(m.normalized()) : Eigen::Vector3d(0, 0, 1);
+        m = m.squaredNorm() > 0 ? Eigen::Vector3d(m.normalized()) : Eigen::Vector3d(0, 0, 1);
       }
     }
     value.disp = disp + detail_height;
@@ -548,8 +548,8 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
           count = 1;
         }
         // The box filter: mean displacement, mean normal renormalised.
-        const Eigen::Vector3d ts = sum.ts.norm() > 0 ? Eigen::Vector3d(sum.ts.normalized()) : Eigen::Vector3d(0, 0, 1);
-        const Eigen::Vector3d os = sum.os.norm() > 0 ? Eigen::Vector3d(sum.os.normalized()) : Eigen::Vector3d(0, 0, 1);
+        const Eigen::Vector3d ts = sum.ts.squaredNorm() > 0 ? Eigen::Vector3d(sum.ts.normalized()) : Eigen::Vector3d(0, 0, 1);
+        const Eigen::Vector3d os = sum.os.squaredNorm() > 0 ? Eigen::Vector3d(sum.os.normalized()) : Eigen::Vector3d(0, 0, 1);
         r.displacement.at(x, y) = static_cast<float>(sum.disp / count);
         for (int c = 0; c < 3; ++c) {
           r.normal_ts.at(x, y, c) = static_cast<float>(ts[c]);
