@@ -6,6 +6,7 @@
 #include "meso/formats/image_io.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -145,7 +146,9 @@ void add_bake(CLI::App& app, Context& ctx) {
       o.front = parse_length(args->front, diagonal, "--front");
       o.back = parse_length(args->back, diagonal, "--back");
       o.bunch = parse_length(args->bunch, diagonal, "--bunch");
+      const auto start = std::chrono::steady_clock::now();
       const BakeResult r = bake(low, high, o, progress);
+      const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       const std::filesystem::path dir(args->out_dir);
       OutputSet outputs;
       nlohmann::json written = nlohmann::json::array();
@@ -199,6 +202,9 @@ void add_bake(CLI::App& app, Context& ctx) {
                 {"misses", r.misses},
                 {"displacement_min", r.min_displacement},
                 {"displacement_max", r.max_displacement},
+                {"rays", r.rays},
+                {"seconds", seconds},
+                {"rays_per_second", seconds > 0 ? static_cast<double>(r.rays) / seconds : 0.0},
                 {"outputs", written}};
       if (!png_range.is_null()) report["displacement_png"] = png_range;
       // The faces the artist should look at: those whose texels missed or were ambiguous,

@@ -85,6 +85,9 @@ struct BakeResult {
   size_t covered_texels = 0;  // texels some UV triangle touches (rasterize_uv), misses included
   size_t hits = 0, misses = 0;
   size_t ambiguous = 0;  // hits whose choice was ambiguous (counted in hits too)
+  // Rays cast (Embree queries: intersect, occluded and multi-hit collect, each one
+  // traversal), summed over rows in order: the same whatever the thread count.
+  uint64_t rays = 0;
   // Per base face (face order): covered texels, misses and ambiguous texels, for the
   // artist's report.
   std::vector<uint32_t> face_texels, face_misses, face_ambiguous;
