@@ -472,9 +472,9 @@ TEST(Bake, TinyCoordinatesKeepTheAnswerRelativeToTheAmplitude) {
   EXPECT_LT(worst, 1e-6 * amplitude) << "measured 1e-7 of the amplitude";
 }
 
-// Base faces whose UVs collapse (to a point, to a segment) have no tangent frame and no
-// area in the map: nothing may turn NaN, and the texels of the good chart are exactly those
-// of the same bake without the bad faces.
+// Base faces whose UVs collapse (to a point, to a segment; a sliver of 1e-7 UV area) have no
+// tangent frame (or a nearly singular one) and no area in the map: nothing may turn NaN, and
+// the texels of the good chart are exactly those of the same bake without the bad faces.
 TEST(Bake, CollapsedBaseUvsLeaveNoNanAndOtherTexelsUnchanged) {
   Mesh good = test::make_grid(2, 2);
   for (auto h : good.halfedges()) good.set_texcoord2D(h, good.texcoord2D(h) * 0.5f);  // the chart: [0, 1/2]^2
@@ -489,6 +489,7 @@ TEST(Bake, CollapsedBaseUvsLeaveNoNanAndOtherTexelsUnchanged) {
   };
   add_triangle({Vec3f(0.6f, 0.6f, 0), Vec3f(0.9f, 0.6f, 0), Vec3f(0.6f, 0.9f, 0)}, {Vec2f(0.75f, 0.75f), Vec2f(0.75f, 0.75f), Vec2f(0.75f, 0.75f)});
   add_triangle({Vec3f(0.1f, 0.6f, 0), Vec3f(0.4f, 0.6f, 0), Vec3f(0.1f, 0.9f, 0)}, {Vec2f(0.6f, 0.9f), Vec2f(0.7f, 0.9f), Vec2f(0.8f, 0.9f)});
+  add_triangle({Vec3f(0.6f, 0.1f, 0), Vec3f(0.9f, 0.1f, 0), Vec3f(0.6f, 0.4f, 0)}, {Vec2f(0.6f, 0.7f), Vec2f(0.8f, 0.7f), Vec2f(0.7f, 0.7000005f)});
   compute_angle_weighted_normals(low);
   const Mesh high = make_plane(0.1f, -0.05f, 0.01f);
   BakeOptions o;
@@ -496,6 +497,11 @@ TEST(Bake, CollapsedBaseUvsLeaveNoNanAndOtherTexelsUnchanged) {
   o.front = o.back = 0.5f;
   const BakeResult with = bake(low, high, o), without = bake(good, high, o);
   expect_finite(with);
+  // Zero UV area covers no texel (uv_raster: as uvpack's degenerate faces); the sliver
+  // does, and its nearly singular UV-to-3D map makes extreme tangents.
+  EXPECT_EQ(with.face_texels[8], 0u);
+  EXPECT_EQ(with.face_texels[9], 0u);
+  EXPECT_GT(with.face_texels[10], 0u);
   size_t compared = 0;
   for (size_t i = 0; i < without.coverage.texel_count(); ++i) {
     if (without.coverage.pixels[i] == 0.0f) continue;
