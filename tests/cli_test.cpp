@@ -781,3 +781,171 @@ TEST(CliMeshreduce, QualityPresets) {
 
 }  // namespace
 }  // namespace meso
+
+// ---- bake: the report, --dilate, --samples, ambiguity, the 16-bit displacement (issue 5) ----
+
+namespace meso {
+namespace {
+
+// The meso command line of a bake of `low` onto `high` (files in `dir`) into dir/out.
+std::string bake_args(const test::TempDir& dir, const std::string& low, const std::string& high, const std::string& out, const std::string& extra) {
+  return "bake --low " + (dir / low).string() + " --high " + (dir / high).string() + " -o " + (dir / out).string() + " " + extra;
+}
+
+// --json reports the rays cast, the bake's time and their ratio; --dilate inf (and -1) is the
+// default, unlimited fill; --dilate 2 fills only texels within 2 of a hit texel (Euclidean,
+// as dilation_sources), the others keep the fill value (displacement 0).
+TEST(CliBake, ReportsRaysPerSecondAndDilatesByTheRadiusGiven) {
+  test::TempDir dir;
+  // One quad over UV [1/4, 1/2]^2 (in 3D the same square at z = 0) under a plane at 0.01.
+  write_mesh(test::make_uv_quads({{0.25f, 0.25f, 0.5f, 0.5f}}), dir / "low.obj");
+  write_mesh(test::make_plane(0, 0, 0.01f), dir / "high.obj");
+  const std::string size = "--size 32 --front 0.05 --back 0.05 --maps displacement,coverage";
+  const Result plain = run(bake_args(dir, "low.obj", "high.obj", "default", size + " --json"));
+  ASSERT_EQ(plain.code, 0) << plain.err;
+  const auto report = nlohmann::json::parse(plain.out);
+  ASSERT_TRUE(report.contains("seconds"));
+  ASSERT_TRUE(report.contains("rays_per_second"));
+  EXPECT_GT(report["seconds"].get<double>(), 0.0);
+  EXPECT_GT(report["rays_per_second"].get<double>(), 0.0);
+  EXPECT_GE(report["rays"].get<double>(), 2.0 * report["covered_texels"].get<double>()) << "at least one ray each way per texel";
+  EXPECT_NEAR(report["rays_per_second"].get<double>() * report["seconds"].get<double>(), report["rays"].get<double>(),
+              1e-6 * report["rays"].get<double>());
+
+  for (const char* unlimited : {"inf", "-1"}) {
+    const Result r = run(bake_args(dir, "low.obj", "high.obj", std::string("inf") + unlimited, size + " --dilate " + unlimited));
+    ASSERT_EQ(r.code, 0) << unlimited << ": " << r.err;
+    EXPECT_EQ(test::read_text(dir / (std::string("inf") + unlimited) / "displacement.exr"), test::read_text(dir / "default" / "displacement.exr"))
+        << "--dilate " << unlimited;
+  }
+  const Image filled = read_image(dir / "default" / "displacement.exr");
+  for (float v : filled.pixels) EXPECT_NEAR(v, 0.01f, 1e-6f);
+
+  const Result two = run(bake_args(dir, "low.obj", "high.obj", "two", size + " --dilate 2"));
+  ASSERT_EQ(two.code, 0) << two.err;
+  const Image disp = read_image(dir / "two" / "displacement.exr"), coverage = read_image(dir / "two" / "coverage.png");
+  size_t kept = 0, reached = 0;
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 32; ++x) {
+      int nearest = 1 << 30;  // squared distance to the nearest texel that hit
+      for (int yy = 0; yy < 32; ++yy)
+        for (int xx = 0; xx < 32; ++xx)
+          if (coverage.at(xx, yy) == 1.0f) nearest = std::min(nearest, (x - xx) * (x - xx) + (y - yy) * (y - yy));
+      if (nearest > 4) {
+        EXPECT_EQ(disp.at(x, y), 0.0f) << x << "," << y << " is farther than 2 from the chart";
+        ++kept;
+      } else {
+        EXPECT_NEAR(disp.at(x, y), 0.01f, 1e-6f) << x << "," << y;
+        reached += nearest > 0;
+      }
+    }
+  EXPECT_GT(kept, 0u);
+  EXPECT_GT(reached, 0u);
+  for (const char* bad : {"--dilate infinity", "--dilate -2", "--dilate 2.5", "--dilate ''"}) {
+    const Result r = run(bake_args(dir, "low.obj", "high.obj", "bad", size + " " + bad));
+    EXPECT_EQ(r.code, 2) << bad;
+    EXPECT_EQ(lines(r.err), 1u) << r.err;
+  }
+}
+
+// --samples takes squares only (the samples sit at the centres of n x n sub-texels): 4 and 9
+// run and are reported, 2 and 5 are refused with one line naming the option, before loading.
+TEST(CliBake, SamplesMustBeASquare) {
+  test::TempDir dir;
+  write_mesh(test::make_grid(2, 2), dir / "low.obj");
+  write_mesh(test::make_plane(0, 0, 0.01f), dir / "high.obj");
+  for (const int k : {4, 9}) {
+    const Result r = run(bake_args(dir, "low.obj", "high.obj", "s" + std::to_string(k), "--size 8 --json --samples " + std::to_string(k)));
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(nlohmann::json::parse(r.out)["samples"], k);
+  }
+  for (const int k : {2, 5}) {
+    const Result r = run(bake_args(dir, "low.obj", "high.obj", "bad", "--size 8 --samples " + std::to_string(k)));
+    EXPECT_EQ(r.code, 2) << k;
+    EXPECT_EQ(lines(r.err), 1u) << r.err;
+    EXPECT_NE(r.err.find("--samples"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("square"), std::string::npos) << r.err;
+  }
+}
+
+// Two layers 0.0100 out and 0.0102 in, within the bunch distance (0.001) of each other: every
+// texel's choice is ambiguous, and the report lists each base face with all its texels.
+TEST(CliBake, AmbiguousTexelsAreReportedPerFace) {
+  test::TempDir dir;
+  write_mesh(test::make_grid(2, 2), dir / "low.obj");
+  write_mesh(test::make_layers({{0.010f, true}, {-0.0102f, true}}), dir / "high.obj");
+  const Result r = run(bake_args(dir, "low.obj", "high.obj", "maps", "--size 8 --front 0.05 --back 0.05 --bunch 0.001 --json"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto report = nlohmann::json::parse(r.out);
+  EXPECT_EQ(report["ambiguous"], 64);
+  const auto& faces = report["ambiguous_faces"];
+  ASSERT_EQ(faces.size(), 8u) << "every face of the 2 x 2 grid";
+  size_t sum = 0;
+  std::vector<int> seen;
+  for (const auto& f : faces) {
+    EXPECT_EQ(f["ambiguous"], f["texels"]) << f.dump();
+    sum += f["ambiguous"].get<size_t>();
+    seen.push_back(f["face"].get<int>());
+  }
+  EXPECT_EQ(sum, 64u);
+  std::sort(seen.begin(), seen.end());
+  EXPECT_EQ(seen, std::vector<int>({0, 1, 2, 3, 4, 5, 6, 7}));
+  const Image coverage = read_image(dir / "maps" / "coverage.png");
+  for (float c : coverage.pixels) EXPECT_NEAR(c, 191.0f / 255.0f, 1e-6f) << "0.75 in 8 bits";
+}
+
+// A high plane with a hole over UV [1/4, 3/4]^2: a quarter of the texels miss, the report
+// names the faces, and --max-miss-rate turns that into exit 1 (maps written) only above it.
+TEST(CliBake, AHoleFailsTheMissRateCheck) {
+  test::TempDir dir;
+  write_mesh(test::make_grid(2, 2), dir / "low.obj");
+  write_mesh(test::without_faces(test::make_plane(0, 0, 0.02f),
+                                 [](const Mesh& m, FaceHandle f) {
+                                   Vec3f c(0, 0, 0);
+                                   for (auto v : m.fv_range(f)) c += m.point(v) / 3.0f;
+                                   return c[0] > 0.25f && c[0] < 0.75f && c[1] > 0.25f && c[1] < 0.75f;
+                                 }),
+             dir / "high.obj");
+  const std::string common = "--size 16 --front 0.05 --back 0.05 --json --max-miss-rate ";
+  const Result strict = run(bake_args(dir, "low.obj", "high.obj", "strict", common + "0.2"));
+  EXPECT_EQ(strict.code, 1) << strict.err;
+  EXPECT_TRUE(fs::exists(dir / "strict" / "displacement.exr"));
+  const auto report = nlohmann::json::parse(strict.out);
+  EXPECT_EQ(report["misses"], 64);
+  EXPECT_DOUBLE_EQ(report["miss_rate"].get<double>(), 0.25);
+  size_t sum = 0;
+  for (const auto& f : report["miss_faces"]) sum += f["misses"].get<size_t>();
+  EXPECT_EQ(sum, 64u);
+  EXPECT_EQ(run(bake_args(dir, "low.obj", "high.obj", "loose", common + "0.3")).code, 0);
+}
+
+// displacement.png: 16-bit grey, its bias and scale in the metadata equal to the report's,
+// and bias + scale * value reproduces displacement.exr within one step of 16 bits.
+TEST_F(Skeleton, DisplacementPngIs16BitAndDecodesToTheExr) {
+  const auto& d = *dir_;
+  const Result r = run("bake --low " + (d / "base.obj").string() + " --high " + (d / "high.obj").string() + " -o " +
+                       (d / "png16").string() + " --size 64x32 --maps displacement,displacement_png --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto report = nlohmann::json::parse(r.out);
+  const std::string png = test::read_text(d / "png16" / "displacement.png");
+  ASSERT_GT(png.size(), 26u);
+  EXPECT_EQ(png.substr(12, 4), "IHDR");
+  EXPECT_EQ(static_cast<int>(static_cast<unsigned char>(png[24])), 16) << "bit depth";
+  EXPECT_EQ(static_cast<int>(static_cast<unsigned char>(png[25])), 0) << "colour type: grey";
+  const Image img = read_image(d / "png16" / "displacement.png"), exr = read_image(d / "png16" / "displacement.exr");
+  const float bias = std::stof(std::get<std::string>(img.metadata.at("height_bias")));
+  const float scale = std::stof(std::get<std::string>(img.metadata.at("height_scale")));
+  EXPECT_EQ(bias, report["displacement_png"]["bias"].get<float>());
+  EXPECT_EQ(scale, report["displacement_png"]["scale"].get<float>());
+  EXPECT_EQ(bias, report["displacement_min"].get<float>());
+  ASSERT_GT(scale, 0.0f);
+  ASSERT_EQ(img.pixels.size(), exr.pixels.size());
+  double worst = 0;
+  for (size_t i = 0; i < img.pixels.size(); ++i)
+    worst = std::max(worst, std::abs(double(bias) + double(scale) * img.pixels[i] - exr.pixels[i]));
+  std::printf("[ displacement.png ] worst |bias + scale v - exr| = %.3g = %.3f of scale/65535\n", worst, worst / (scale / 65535.0));
+  EXPECT_LE(worst, scale / 65535.0);
+}
+
+}  // namespace
+}  // namespace meso

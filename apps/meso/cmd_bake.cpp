@@ -6,6 +6,7 @@
 #include "meso/formats/image_io.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -38,15 +39,30 @@ const std::map<std::string, std::string>& map_files() {
   return files;
 }
 
+// --dilate: texels to fill around the charts, or the whole map ("inf", or -1 as before).
+int parse_dilate(const std::string& text) {
+  if (text == "inf" || text == "-1") return -1;
+  int v = -1;
+  size_t used = 0;
+  try {
+    v = std::stoi(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size() || v < 0 || v > (1 << 20))
+    throw UsageError("--dilate '" + text + "': expected a texel count (0 to 1048576), or inf (or -1) for the whole map");
+  return v;
+}
+
 }  // namespace
 
 void add_bake(CLI::App& app, Context& ctx) {
   struct Args {
     std::string low, high, cage, out_dir, size = "1024", front, back, bunch, hit = "nearest";
-    std::string maps = "displacement,normal_ts,coverage", basis = "linear", detail;
+    std::string maps = "displacement,normal_ts,coverage", basis = "linear", detail, dilate = "inf";
     float detail_scale = 0.01f;
     float max_miss_rate = 1;
-    int dilate = -1, samples = 1;
+    int samples = 1;
     bool ignore_backfaces = false, match_by_name = false;
   };
   auto args = std::make_shared<Args>();
@@ -80,8 +96,8 @@ void add_bake(CLI::App& app, Context& ctx) {
       ->check(CLI::IsMember({"nearest", "furthest", "front-else-nearest", "front-only"}))
       ->capture_default_str();
   sub->add_option("--samples", args->samples,
-                  "Samples per texel, rounded to a square n x n (stratified, box-filtered; samples may fall on neighbouring "
-                  "triangles of the texel's chart)")
+                  "Samples per texel, a square n x n: 1, 4, 9, 16, ... 256 (stratified, box-filtered; samples may fall on "
+                  "neighbouring triangles of the texel's chart)")
       ->check(CLI::Range(1, 256))
       ->capture_default_str();
   sub->add_flag("--match-by-name", args->match_by_name,
@@ -94,12 +110,18 @@ void add_bake(CLI::App& app, Context& ctx) {
   sub->add_option("--max-miss-rate", args->max_miss_rate,
                   "Exit 1 (outputs still written) when more than this fraction of covered texels miss")
       ->check(CLI::Range(0.0, 1.0) & Finite);
-  sub->add_option("--dilate", args->dilate, "Texels to fill around charts (-1: the whole map)")->check(CLI::Range(-1, 1 << 20));
+  sub->add_option("--dilate", args->dilate, "Texels to fill around charts: a count, or inf (or -1) for the whole map")
+      ->capture_default_str();
   sub->callback([&ctx, args] {
     ctx.run = [&ctx, args](nlohmann::json& report, Progress& progress) {
       BakeOptions o;
       parse_size(args->size, o.width, o.height);
-      o.dilate = args->dilate;
+      o.dilate = parse_dilate(args->dilate);
+      // Samples sit at the centres of n x n sub-texels: any other count would be rounded to
+      // a square the user did not ask for (2 used to become 1), so it is refused.
+      const int side = static_cast<int>(std::lround(std::sqrt(static_cast<double>(args->samples))));
+      if (side * side != args->samples)
+        throw UsageError("--samples " + std::to_string(args->samples) + ": expected a square number of samples per texel (1, 4, 9, 16, ...)");
       for (const HitRule rule : {HitRule::nearest, HitRule::furthest, HitRule::front_else_nearest, HitRule::front_only})
         if (args->hit == hit_rule_name(rule)) o.hit = rule;
       o.ignore_backfaces = args->ignore_backfaces;
@@ -145,7 +167,9 @@ void add_bake(CLI::App& app, Context& ctx) {
       o.front = parse_length(args->front, diagonal, "--front");
       o.back = parse_length(args->back, diagonal, "--back");
       o.bunch = parse_length(args->bunch, diagonal, "--bunch");
+      const auto start = std::chrono::steady_clock::now();
       const BakeResult r = bake(low, high, o, progress);
+      const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       const std::filesystem::path dir(args->out_dir);
       OutputSet outputs;
       nlohmann::json written = nlohmann::json::array();
@@ -199,6 +223,9 @@ void add_bake(CLI::App& app, Context& ctx) {
                 {"misses", r.misses},
                 {"displacement_min", r.min_displacement},
                 {"displacement_max", r.max_displacement},
+                {"rays", r.rays},
+                {"seconds", seconds},
+                {"rays_per_second", seconds > 0 ? static_cast<double>(r.rays) / seconds : 0.0},
                 {"outputs", written}};
       if (!png_range.is_null()) report["displacement_png"] = png_range;
       // The faces the artist should look at: those whose texels missed or were ambiguous,

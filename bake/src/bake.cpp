@@ -290,7 +290,9 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
       }
     }
   });
-  auto trace = [&](int face, const std::array<float, 3>& bary, std::vector<RayHit>& hits, SampleValue& value) -> bool {
+  // `rays` counts the Embree queries cast (each intersect, occluded and collect is one ray),
+  // for the report's rays per second.
+  auto trace = [&](int face, const std::array<float, 3>& bary, std::vector<RayHit>& hits, SampleValue& value, uint64_t& rays) -> bool {
     const TexelSample s{face, bary, true};
     const Part& part = parts[static_cast<size_t>(face_part[static_cast<size_t>(face)])];
     const RayScene& scene = *part.scene;
@@ -362,16 +364,19 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
       const float window = 2.0f * r.bunch + 1e-6f * (tfar + eps);
       bool complete = true;  // c holds every candidate up to the nearest's t + window
       if (probe < tfar) {
+        rays += scene.filters();
         if (!scene.collect(org, dir_s, 0.0f, probe, window, c)) return false;
         if (c.n == 0) return true;
         complete = false;  // only up to `probe`: enough if the checks below stay within it
       }
+      rays += complete && scene.filters();
       if (complete && !scene.collect(org, dir_s, 0.0f, tfar, window, c)) return false;
       if (c.n == 0) return true;  // intersect() misses
       int first = 0;
       for (int j = 1; j < c.n; ++j)
         if (c.hit[j].t < c.hit[first].t) first = j;
       if (!complete && !(c.hit[first].t + window <= probe)) {
+        ++rays;
         if (!scene.collect(org, dir_s, 0.0f, tfar, window, c)) return false;
         first = 0;
         for (int j = 1; j < c.n; ++j)
@@ -401,6 +406,7 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
       bool found_front = false;
       for (int k = 0; k < 16; ++k) {
         const auto h = scene.intersect(org, dir_s, tnear, tfar);
+        ++rays;
         if (!h.valid()) break;
         const RayHit rh = make_hit(way, h.t, h.prim, h.u, h.v);
         // Past the hit (by a relative step that float coordinates resolve).
@@ -411,6 +417,7 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
           const bool done = !all_hits && (o.hit == HitRule::nearest || found_front);
           if (done) tfar = std::min(tfar, h.t + r.bunch);  // only the bunch remains of interest
           // Usually nothing is that close behind: an any-hit query says so for less.
+          rays += done && tnear < tfar;  // the occluded() query below
           if (done && (tnear >= tfar || !scene.occluded(org, dir_s, tnear, tfar))) break;
         }
         if (tnear >= tfar) break;
@@ -516,9 +523,11 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
   }
 
   building.wait();
+  std::vector<uint64_t> row_rays(static_cast<size_t>(o.height), 0);  // summed in row order below
   tbb::parallel_for(tbb::blocked_range<int>(0, o.height), [&](const tbb::blocked_range<int>& rows) {
     std::vector<RayHit> hits;
     for (int y = rows.begin(); y < rows.end(); ++y) {
+      uint64_t rays = 0;  // local: rows of other threads share the vector's cache lines
       std::vector<TexelSample> band;
       if (fine) band = fine->rows(y * sub, (y + 1) * sub);
       for (int x = 0; x < o.width; ++x) {
@@ -534,7 +543,7 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
           for (int a = 0; a < sub; ++a) {
             const TexelSample& f = band[static_cast<size_t>(b) * static_cast<size_t>(o.width * sub) + static_cast<size_t>(x * sub + a)];
             if (f.face < 0 || !f.centre_inside || chart[static_cast<size_t>(f.face)] != chart[static_cast<size_t>(s.face)]) continue;
-            if (!trace(f.face, f.bary, hits, one)) continue;
+            if (!trace(f.face, f.bary, hits, one, rays)) continue;
             sum.disp += one.disp;
             sum.ts += one.ts;
             sum.os += one.os;
@@ -542,7 +551,7 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
             ++count;
           }
         if (count == 0) {
-          if (!trace(s.face, s.bary, hits, one)) continue;
+          if (!trace(s.face, s.bary, hits, one, rays)) continue;
           sum = one;
           unsure = one.ambiguous;
           count = 1;
@@ -558,10 +567,12 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
         ambiguous[i] = unsure;
         written[i] = 1;
       }
+      row_rays[static_cast<size_t>(y)] = rays;
       progress.advance(1);
     }
   });
   progress.end();
+  for (const uint64_t n : row_rays) r.rays += n;
 
   r.coverage = Image(o.width, o.height, 1, 0.0f);
   r.face_texels.assign(low.n_faces(), 0);

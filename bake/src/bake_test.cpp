@@ -11,23 +11,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <random>
 
 namespace meso {
 namespace {
 
-// The plane z = a x + b y + c over [-0.5, 1.5]^2, finely enough triangulated.
-Mesh make_plane(float a, float b, float c) {
-  Mesh m = test::make_grid(8, 8, 2.0f, 2.0f);
-  for (auto v : m.vertices()) {
-    Vec3f p = m.point(v) - Vec3f(0.5f, 0.5f, 0.0f);
-    p[2] = a * p[0] + b * p[1] + c;
-    m.set_point(v, p);
-  }
-  compute_angle_weighted_normals(m);
-  return m;
-}
+using test::make_layers;
+using test::make_plane;
 
 struct PlaneCase {
   float a, b, c;
@@ -48,6 +40,10 @@ TEST_P(BakePlane, ReproducesTheAnalyticAnswer) {
   const BakeResult r = bake(low, high, o);
   EXPECT_EQ(r.covered_texels, 32u * 16u);
   EXPECT_EQ(r.misses, 0u);
+  // One ray each way at least (either a multi-hit collect or an intersect); here at most one
+  // more (the occluded() check behind the hit where Embree lacks filter functions).
+  EXPECT_GE(r.rays, 2u * r.covered_texels);
+  EXPECT_LE(r.rays, 3u * r.covered_texels);
   const Vec3f n = Vec3f(-a, -b, 1.0f).normalized();
   for (int y = 0; y < o.height; ++y) {
     for (int x = 0; x < o.width; ++x) {
@@ -85,32 +81,16 @@ TEST(Bake, HugeCoordinatesKeepSmallDisplacementsExact) {
     }
 }
 
-// Several horizontal planes z = c over [-0.5, 1.5]^2 in one mesh; `up` false flips a
-// plane's faces (it then faces -z, against the base).
-Mesh make_layers(const std::vector<std::pair<float, bool>>& layers) {
-  Mesh out;
-  for (const auto& [z, up] : layers) {
-    const Mesh m = make_plane(0, 0, z);
-    std::vector<VertexHandle> map;
-    for (auto v : m.vertices()) map.push_back(out.add_vertex(m.point(v)));
-    for (auto f : m.faces()) {
-      std::vector<VertexHandle> vs;
-      for (auto v : m.fv_range(f)) vs.push_back(map[static_cast<size_t>(v.idx())]);
-      if (!up) std::reverse(vs.begin(), vs.end());
-      out.add_face(vs);
-    }
-  }
-  compute_angle_weighted_normals(out);
-  return out;
-}
-
 // The value every covered texel of a flat base (z = 0, normal +z) gets over `high`.
-float baked_value(const Mesh& high, const BakeOptions& base_options, size_t* ambiguous = nullptr) {
+// `result`: the whole bake, for its report.
+float baked_value(const Mesh& high, const BakeOptions& base_options, size_t* ambiguous = nullptr, BakeResult* result = nullptr) {
   BakeOptions o = base_options;
   o.width = o.height = 8;
   o.front = o.back = 0.05f;
   if (o.bunch <= 0) o.bunch = 0.001f;
-  const BakeResult r = bake(test::make_grid(2, 2), high, o);
+  BakeResult local;
+  BakeResult& r = result ? *result : local;
+  r = bake(test::make_grid(2, 2), high, o);
   EXPECT_EQ(r.misses, 0u);
   if (ambiguous) *ambiguous = r.ambiguous;
   const float v = r.displacement.at(4, 4);
@@ -150,8 +130,20 @@ TEST(Bake, BunchesTakeTheirOutermostHitAndTiesAreAmbiguous) {
   size_t ambiguous = 0;
   EXPECT_NEAR(baked_value(make_layers({{0.010f, true}, {0.0105f, true}, {-0.03f, true}}), o, &ambiguous), 0.0105f, 1e-6f);
   EXPECT_EQ(ambiguous, 0u);
-  EXPECT_NEAR(baked_value(make_layers({{0.010f, true}, {-0.0102f, true}}), o, &ambiguous), 0.010f, 1e-6f);
+  BakeResult r;
+  EXPECT_NEAR(baked_value(make_layers({{0.010f, true}, {-0.0102f, true}}), o, &ambiguous, &r), 0.010f, 1e-6f);
   EXPECT_EQ(ambiguous, 64u) << "0.0100 out and 0.0102 in are within the bunch distance of each other";
+  // The report: every ambiguous texel is marked 0.75 in the coverage map (and is a hit), and
+  // the per-face counts add up to the total, face by face no more than the face's texels.
+  for (float c : r.coverage.pixels) EXPECT_EQ(c, 0.75f);
+  EXPECT_EQ(r.hits, 64u);
+  ASSERT_EQ(r.face_ambiguous.size(), 8u);
+  size_t per_face = 0;
+  for (size_t f = 0; f < r.face_ambiguous.size(); ++f) {
+    EXPECT_EQ(r.face_ambiguous[f], r.face_texels[f]) << f;
+    per_face += r.face_ambiguous[f];
+  }
+  EXPECT_EQ(per_face, r.ambiguous);
   EXPECT_NEAR(baked_value(make_layers({{0.010f, true}, {-0.015f, true}}), o, &ambiguous), 0.010f, 1e-6f);
   EXPECT_EQ(ambiguous, 0u);
 }
@@ -363,6 +355,164 @@ TEST(Bake, MissesAreCountedAndFilled) {
   for (float d : r.displacement.pixels) EXPECT_EQ(d, 0.0f);
 }
 
+// Every sample of every map is a number (no NaN, no infinity), misses and fills included.
+void expect_finite(const BakeResult& r) {
+  for (const Image* img : {&r.displacement, &r.normal_ts, &r.normal_os, &r.coverage})
+    for (size_t i = 0; i < img->pixels.size(); ++i) ASSERT_TRUE(std::isfinite(img->pixels[i])) << i;
+  EXPECT_TRUE(std::isfinite(r.min_displacement));
+  EXPECT_TRUE(std::isfinite(r.max_displacement));
+}
+
+// Grazing rays: the high plane z = 100 (x - 1/2) meets the vertical rays of a flat base at
+// 0.57 degrees. Within the reach (5) the answer is still exact: texels with |100 (u - 1/2)|
+// <= 5 hit at that distance with the plane's normal, the others miss (their nearest
+// intersection is further than the reach; 0.47 of margin either side). A wall standing
+// exactly in the plane of one column's rays (parallel: Embree may or may not report it) and
+// a nearly vertical plane must still leave finite maps.
+TEST(Bake, GrazingRaysHitWithinReachExactlyAndStayFinite) {
+  const float k = 100.0f;
+  BakeOptions o;
+  o.width = o.height = 64;
+  o.front = o.back = 5.0f;
+  const BakeResult r = bake(test::make_grid(2, 2), make_plane(k, 0, -0.5f * k), o);
+  expect_finite(r);
+  EXPECT_EQ(r.hits, 6u * 64u) << "columns 29..34";
+  EXPECT_EQ(r.misses, 58u * 64u);
+  const Eigen::Vector3d n = Eigen::Vector3d(-k, 0, 1).normalized();
+  double worst = 0;
+  for (int y = 0; y < o.height; ++y)
+    for (int x = 0; x < o.width; ++x) {
+      const double u = texel_center_u(x, o.width), d = k * (u - 0.5);
+      const bool hit = std::abs(d) <= o.front;
+      ASSERT_EQ(r.coverage.at(x, y), hit ? 1.0f : 0.5f) << x << "," << y;
+      if (!hit) continue;
+      worst = std::max(worst, std::abs(r.displacement.at(x, y) - d));
+      for (int c = 0; c < 3; ++c) ASSERT_NEAR(r.normal_ts.at(x, y, c), n[c], 1e-5) << x << "," << y;
+    }
+  std::printf("[ grazing ] worst displacement error %.3g (|d| up to 3.9)\n", worst);
+  EXPECT_LT(worst, 1e-5) << "float coordinates of the plane reach 100 (ulp 8e-6); measured 7e-7";
+
+  // Rays exactly in the plane of a wall (x = the texel centre of column 31) and a plane a
+  // hair from vertical (1e4): finite, and nothing hits except possibly that one column.
+  Mesh wall;
+  const float xw = static_cast<float>(texel_center_u(31, 64));
+  const VertexHandle a = wall.add_vertex(Vec3f(xw, -0.5f, -1)), b = wall.add_vertex(Vec3f(xw, 1.5f, -1));
+  const VertexHandle c = wall.add_vertex(Vec3f(xw, 1.5f, 1)), d = wall.add_vertex(Vec3f(xw, -0.5f, 1));
+  wall.add_face(a, b, c);
+  wall.add_face(a, c, d);
+  compute_angle_weighted_normals(wall);
+  o.front = o.back = 0.5f;
+  const BakeResult edge_on = bake(test::make_grid(2, 2), wall, o);
+  expect_finite(edge_on);
+  for (int y = 0; y < o.height; ++y)
+    for (int x = 0; x < o.width; ++x)
+      if (x != 31) {
+        ASSERT_EQ(edge_on.coverage.at(x, y), 0.5f) << x << "," << y;
+      }
+  const BakeResult steep = bake(test::make_grid(2, 2), make_plane(1e4f, 0, -0.5e4f), o);
+  expect_finite(steep);
+  EXPECT_EQ(steep.hits + steep.misses, steep.covered_texels);
+}
+
+// A high plane with a square hole over [1/4, 3/4]^2: the texels whose centres lie over it
+// (8 x 8 of 16 x 16) miss, are marked 0.5, are reported under the base faces they belong to,
+// and are filled from their neighbours (the plane's height).
+TEST(Bake, AHoleInTheHighMeshMissesPerBaseFace) {
+  const Mesh high = test::without_faces(make_plane(0, 0, 0.02f), [](const Mesh& m, FaceHandle f) {
+    Vec3f centroid(0, 0, 0);
+    for (auto v : m.fv_range(f)) centroid += m.point(v) / 3.0f;
+    return centroid[0] > 0.25f && centroid[0] < 0.75f && centroid[1] > 0.25f && centroid[1] < 0.75f;
+  });
+  ASSERT_EQ(high.n_faces(), 128u - 8u);
+  const Mesh low = test::make_grid(2, 2);
+  BakeOptions o;
+  o.width = o.height = 16;
+  o.front = o.back = 0.05f;
+  const BakeResult r = bake(low, high, o);
+  expect_finite(r);
+  EXPECT_EQ(r.misses, 64u);
+  EXPECT_EQ(r.hits, 256u - 64u);
+  const auto samples = rasterize_uv(low, o.width, o.height);
+  std::vector<uint32_t> expected(low.n_faces(), 0);
+  for (int y = 0; y < o.height; ++y)
+    for (int x = 0; x < o.width; ++x) {
+      const bool in_hole = x >= 4 && x < 12 && y >= 4 && y < 12;
+      EXPECT_EQ(r.coverage.at(x, y), in_hole ? 0.5f : 1.0f) << x << "," << y;
+      EXPECT_NEAR(r.displacement.at(x, y), 0.02f, 1e-6f) << x << "," << y;
+      if (in_hole) ++expected[static_cast<size_t>(samples[static_cast<size_t>(y * o.width + x)].face)];
+    }
+  EXPECT_EQ(r.face_misses, expected);
+  EXPECT_GT(std::count_if(expected.begin(), expected.end(), [](uint32_t n) { return n > 0; }), 1) << "several faces report";
+}
+
+// The plane case of BakePlane at a scale of 1e-4 (the whole scene, so displacements are
+// ~1e-5): the bake's offsets (ray start, bunch, reach) are relative to the meshes' size, so
+// the error stays a small fraction of the amplitude.
+TEST(Bake, TinyCoordinatesKeepTheAnswerRelativeToTheAmplitude) {
+  const float a = 0.1f, b = -0.05f, c = 0.05f, s = 1e-4f;
+  Mesh low = test::make_grid(4, 2);
+  Mesh high = make_plane(a, b, c);
+  for (auto v : low.vertices()) low.set_point(v, low.point(v) * s);
+  for (auto v : high.vertices()) high.set_point(v, high.point(v) * s);
+  BakeOptions o;
+  o.width = o.height = 24;
+  o.front = o.back = 0.5f * s;
+  const BakeResult r = bake(low, high, o);
+  EXPECT_EQ(r.misses, 0u);
+  const Vec3f n = Vec3f(-a, -b, 1.0f).normalized();
+  double worst = 0;
+  for (int y = 0; y < o.height; ++y)
+    for (int x = 0; x < o.width; ++x) {
+      const double u = texel_center_u(x, o.width), v = texel_center_v(y, o.height);
+      worst = std::max(worst, std::abs(r.displacement.at(x, y) - s * (a * u + b * v + c)));
+      for (int k = 0; k < 3; ++k) ASSERT_NEAR(r.normal_ts.at(x, y, k), n[k], 1e-5f) << x << "," << y;
+    }
+  const double amplitude = s * (std::abs(a) + std::abs(b) + std::abs(c));
+  std::printf("[ tiny ] worst displacement error %.3g = %.3g of the amplitude %.3g\n", worst, worst / amplitude, amplitude);
+  EXPECT_LT(worst, 1e-6 * amplitude) << "measured 1e-7 of the amplitude";
+}
+
+// Base faces whose UVs collapse (to a point, to a segment; a sliver of 1e-7 UV area) have no
+// tangent frame (or a nearly singular one) and no area in the map: nothing may turn NaN, and
+// the texels of the good chart are exactly those of the same bake without the bad faces.
+TEST(Bake, CollapsedBaseUvsLeaveNoNanAndOtherTexelsUnchanged) {
+  Mesh good = test::make_grid(2, 2);
+  for (auto h : good.halfedges()) good.set_texcoord2D(h, good.texcoord2D(h) * 0.5f);  // the chart: [0, 1/2]^2
+  Mesh low = good;
+  auto add_triangle = [&](const std::array<Vec3f, 3>& p, const std::array<Vec2f, 3>& uv) {
+    std::array<VertexHandle, 3> v;
+    for (size_t k = 0; k < 3; ++k) v[k] = low.add_vertex(p[k]);
+    const FaceHandle f = low.add_face(v[0], v[1], v[2]);
+    for (auto h : face_halfedges(low, f))
+      for (size_t k = 0; k < 3; ++k)
+        if (low.to_vertex_handle(h) == v[k]) low.set_texcoord2D(h, uv[k]);
+  };
+  add_triangle({Vec3f(0.6f, 0.6f, 0), Vec3f(0.9f, 0.6f, 0), Vec3f(0.6f, 0.9f, 0)}, {Vec2f(0.75f, 0.75f), Vec2f(0.75f, 0.75f), Vec2f(0.75f, 0.75f)});
+  add_triangle({Vec3f(0.1f, 0.6f, 0), Vec3f(0.4f, 0.6f, 0), Vec3f(0.1f, 0.9f, 0)}, {Vec2f(0.6f, 0.9f), Vec2f(0.7f, 0.9f), Vec2f(0.8f, 0.9f)});
+  add_triangle({Vec3f(0.6f, 0.1f, 0), Vec3f(0.9f, 0.1f, 0), Vec3f(0.6f, 0.4f, 0)}, {Vec2f(0.6f, 0.7f), Vec2f(0.8f, 0.7f), Vec2f(0.7f, 0.7000005f)});
+  compute_angle_weighted_normals(low);
+  const Mesh high = make_plane(0.1f, -0.05f, 0.01f);
+  BakeOptions o;
+  o.width = o.height = 32;
+  o.front = o.back = 0.5f;
+  const BakeResult with = bake(low, high, o), without = bake(good, high, o);
+  expect_finite(with);
+  // Zero UV area covers no texel (uv_raster: as uvpack's degenerate faces); the sliver
+  // does, and its nearly singular UV-to-3D map makes extreme tangents.
+  EXPECT_EQ(with.face_texels[8], 0u);
+  EXPECT_EQ(with.face_texels[9], 0u);
+  EXPECT_GT(with.face_texels[10], 0u);
+  size_t compared = 0;
+  for (size_t i = 0; i < without.coverage.texel_count(); ++i) {
+    if (without.coverage.pixels[i] == 0.0f) continue;
+    ++compared;
+    ASSERT_EQ(with.coverage.pixels[i], without.coverage.pixels[i]) << i;
+    ASSERT_EQ(with.displacement.pixels[i], without.displacement.pixels[i]) << i;
+    for (size_t c = 0; c < 3; ++c) ASSERT_EQ(with.normal_ts.pixels[3 * i + c], without.normal_ts.pixels[3 * i + c]) << i;
+  }
+  EXPECT_EQ(compared, 16u * 16u);
+}
+
 // Texel centres lying exactly on the diagonal shared by a quad's two triangles belong to one
 // of them: no texel of a chart may fall through the crack between its faces.
 TEST(UvRaster, CentresOnSharedEdgesAreCovered) {
@@ -509,6 +659,7 @@ TEST(Bake, SameBitsWhateverTheThreadCount) {
       EXPECT_EQ(one.hits, many.hits);
       EXPECT_EQ(one.misses, many.misses);
       EXPECT_EQ(one.ambiguous, many.ambiguous);
+      EXPECT_EQ(one.rays, many.rays);
       EXPECT_EQ(one.face_texels, many.face_texels);
       EXPECT_EQ(one.face_misses, many.face_misses);
       EXPECT_EQ(one.face_ambiguous, many.face_ambiguous);

@@ -144,6 +144,8 @@ class RayScene {
     rtcIntersect1(scene_, &cc.ctx, &rh);
     return !out.overflow;
   }
+  // Whether collect() can run (else it returns false at once, casting nothing).
+  bool filters() const { return filters_; }
   const MeshArrays& arrays() const { return arrays_; }
   // A vertex's position relative to the scene's origin.
   Eigen::Vector3d position(uint32_t vertex) const {

@@ -2,6 +2,7 @@
 
 #include "meso/examples/parametric.hpp"
 
+#include <algorithm>
 #include <atomic>
 #include <fstream>
 #include <sstream>
@@ -107,6 +108,51 @@ Mesh make_grid(int columns, int rows, float sx, float sy) {
 
 Mesh make_parametric(int columns, int rows, const std::function<Vec3f(double, double)>& surface, bool wrap_s, bool wrap_t) {
   return make_parametric_surface(columns, rows, surface, wrap_s, wrap_t);
+}
+
+Mesh make_plane(float a, float b, float c) {
+  Mesh m = make_grid(8, 8, 2.0f, 2.0f);
+  for (auto v : m.vertices()) {
+    Vec3f p = m.point(v) - Vec3f(0.5f, 0.5f, 0.0f);
+    p[2] = a * p[0] + b * p[1] + c;
+    m.set_point(v, p);
+  }
+  compute_angle_weighted_normals(m);
+  return m;
+}
+
+Mesh make_layers(const std::vector<std::pair<float, bool>>& layers) {
+  Mesh out;
+  for (const auto& [z, up] : layers) {
+    const Mesh m = make_plane(0, 0, z);
+    std::vector<VertexHandle> map;
+    for (auto v : m.vertices()) map.push_back(out.add_vertex(m.point(v)));
+    for (auto f : m.faces()) {
+      std::vector<VertexHandle> vs;
+      for (auto v : m.fv_range(f)) vs.push_back(map[static_cast<size_t>(v.idx())]);
+      if (!up) std::reverse(vs.begin(), vs.end());
+      out.add_face(vs);
+    }
+  }
+  compute_angle_weighted_normals(out);
+  return out;
+}
+
+Mesh without_faces(const Mesh& mesh, const std::function<bool(const Mesh&, FaceHandle)>& drop) {
+  Mesh out;
+  std::vector<VertexHandle> map(mesh.n_vertices());
+  for (auto f : mesh.faces()) {
+    if (drop(mesh, f)) continue;
+    std::vector<VertexHandle> vs;
+    for (auto v : mesh.fv_range(f)) {
+      VertexHandle& m = map[static_cast<size_t>(v.idx())];
+      if (!m.is_valid()) m = out.add_vertex(mesh.point(v));
+      vs.push_back(m);
+    }
+    out.add_face(vs);
+  }
+  compute_angle_weighted_normals(out);
+  return out;
 }
 
 }  // namespace meso::test

@@ -8,6 +8,7 @@
 #include <vector>
 #include <functional>
 #include <string>
+#include <utility>
 
 namespace meso::test {
 
@@ -45,5 +46,17 @@ Mesh make_uv_quads(const std::vector<std::array<float, 4>>& boxes);
 // With wrap_s (wrap_t) the last column (row) of vertices is the first one again (a closed
 // surface; UVs then have a seam there). Normals: angle-weighted.
 Mesh make_parametric(int columns, int rows, const std::function<Vec3f(double, double)>& surface, bool wrap_s, bool wrap_t);
+
+// The plane z = a x + b y + c over [-0.5, 1.5]^2 (an 8 x 8 grid, UV = (x + 0.5, y + 0.5) / 2),
+// normals from the faces: the high surface of bake tests over a unit base quad.
+Mesh make_plane(float a, float b, float c);
+
+// Several horizontal planes z = c over [-0.5, 1.5]^2 in one mesh; `up` false flips a
+// plane's faces (it then faces -z).
+Mesh make_layers(const std::vector<std::pair<float, bool>>& layers);
+
+// A copy of `mesh` (positions and faces; vertices renumbered, unused ones dropped) without
+// the faces `drop` names, normals recomputed: a high surface with a hole.
+Mesh without_faces(const Mesh& mesh, const std::function<bool(const Mesh&, FaceHandle)>& drop);
 
 }  // namespace meso::test

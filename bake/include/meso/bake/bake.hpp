@@ -45,9 +45,10 @@ struct BakeOptions {
   // distance of each other, in different bunches, make the texel ambiguous (reported).
   // Object units; <= 0: 0.1 % of the high mesh's bounding-box diagonal.
   float bunch = 0.0f;
-  // Samples per texel, rounded to a square n x n: stratified at the centres of the texel's
-  // n x n sub-texels, box-filtered (mean displacement, mean normal renormalised). Samples
-  // may fall on any face of the texel's chart; 1 samples the texel centre exactly.
+  // Samples per texel, rounded to a square n x n (meso bake refuses other counts rather
+  // than round them): stratified at the centres of the texel's n x n sub-texels,
+  // box-filtered (mean displacement, mean normal renormalised). Samples may fall on any face
+  // of the texel's chart; 1 samples the texel centre exactly.
   int samples = 1;
   // A cage: a mesh with the base's topology (same vertices, same faces in the same order),
   // usually the base pushed outward. Each ray then leaves the base point toward the cage's
@@ -85,6 +86,9 @@ struct BakeResult {
   size_t covered_texels = 0;  // texels some UV triangle touches (rasterize_uv), misses included
   size_t hits = 0, misses = 0;
   size_t ambiguous = 0;  // hits whose choice was ambiguous (counted in hits too)
+  // Rays cast (Embree queries: intersect, occluded and multi-hit collect, each one
+  // traversal), summed over rows in order: the same whatever the thread count.
+  uint64_t rays = 0;
   // Per base face (face order): covered texels, misses and ambiguous texels, for the
   // artist's report.
   std::vector<uint32_t> face_texels, face_misses, face_ambiguous;
