@@ -99,8 +99,17 @@ class ConeSearch {
       cx_ = zx_ > 0 ? f_.x1 : f_.x0;
       cy_ = zy_ > 0 ? f_.y1 : f_.y0;
       touches_ = (cx_ == p.x0 || cx_ == px1) && (cy_ == p.y0 || cy_ == py1);
-      sc_ = cx_ == p.x0 ? 0.0 : 1.0;
-      tc_ = cy_ == p.y0 ? 0.0 : 1.0;
+      sc_ = 2 * (cx_ - p.x0);
+      tc_ = 2 * (cy_ - p.y0);
+      // Along a ray y = c + r u out of c (u a unit vector into the zone's quadrant), the
+      // piece's polynomial is quadratic in r: S = S(c) + r grad S(c) . u + r^2 4 e zx zy ux uy
+      // (S(c) and grad S(c) of the polynomial extended to c), and dist(y, F) = r, so
+      //     psi = (S(c) - T) / r + grad S(c) . u + r 4 e zx zy ux uy.
+      // Unless S(c) < T and e zx zy < 0 (then psi is concave in r and may peak inside), psi
+      // is monotone or convex along every ray, so its supremum over a rectangle of the piece
+      // lies on the rectangle's boundary, where exact one-dimensional maxima settle it.
+      // (sc_, tc_ are integers, and the values floats, so S(c) is exact in double.)
+      boundary_max_ = !(p.value(sc_, tc_) < top_ && p.e * zx_ * zy_ < 0);
     }
     if (zx_ != 0 && zy_ != 0 && touches_ && p.value(sc_, tc_) >= top_) attain_corner_limit(p);
     refine(p, 0, 0, 1, 1, 0);
@@ -128,6 +137,39 @@ class ConeSearch {
       for (double t : {t0, t1})
         if (descends(p, s, t)) return false;
     return true;
+  }
+  // Some single corner of F sees the whole rectangle descend: grad S(y) . (y - x) is
+  // bilinear in y (see never_descends), so negative at the rectangle's corners means
+  // negative throughout.
+  bool descends_throughout(const Piece& p, double s0, double t0, double s1, double t1) const {
+    for (double fx : {f_.x0, f_.x1})
+      for (double fy : {f_.y0, f_.y1}) {
+        bool all = true;
+        for (double s : {s0, s1})
+          for (double t : {t0, t1}) all = all && p.gx(t) * (p.x(s) - fx) + p.gy(s) * (p.y(t) - fy) < 0;
+        if (all) return true;
+      }
+    return false;
+  }
+  // The interior maximum of psi along an edge of a corner-zone rectangle: `fixed` is t (an
+  // edge along x, `along_x`) or s, the edge runs over [lo, hi] of the other coordinate. With
+  // q the offset from c along the edge and k the fixed offset across it, S is linear,
+  // S - T = A + B q, and psi(q) = (A + B q) / sqrt(k^2 + q^2) has its one stationary point
+  // where B (k^2 + q^2) = (A + B q) q, at q = B k^2 / A. Its ends are the rectangle's corners.
+  void edge_maximum(const Piece& p, double fixed, double lo, double hi, bool along_x) {
+    const double z = along_x ? zx_ : zy_;
+    const double c_local = along_x ? sc_ : tc_;  // c's position along the edge, local
+    const double k = along_x ? (p.y(fixed) - cy_) * zy_ : (p.x(fixed) - cx_) * zx_;
+    const double a = (along_x ? p.value(c_local, fixed) : p.value(fixed, c_local)) - top_;
+    const double b = 2 * z * (along_x ? p.a + p.e * fixed : p.b + p.e * fixed);  // dS/dq
+    if (a == 0) return;  // psi monotone in q: the ends decide
+    const double local = c_local + 2 * z * (b * k * k / a);
+    if (!(local > lo && local < hi)) return;
+    if (along_x) {
+      attain(p, local, fixed, p.value(local, fixed));
+    } else {
+      attain(p, fixed, local, p.value(fixed, local));
+    }
   }
   void attain(const Piece& p, double s, double t, double v) {
     const double d = distance(p.x(s), p.y(t));
@@ -219,6 +261,13 @@ class ConeSearch {
       }
       // First the plain bound (max S - T) / (nearest distance): most pieces end here.
       if (vmax - top_ <= psi * length(near_x, near_y)) return;
+      if (boundary_max_ && (!relaxed_ || descends_throughout(p, s0, t0, s1, t1))) {
+        // The supremum is on the boundary (relaxed: every point counts, so the same one).
+        for (int k = 0; k < 4; ++k) attain(p, ss[k], ts[k], v[k]);
+        for (double t : {t0, t1}) edge_maximum(p, t, s0, s1, true);
+        for (double s : {s0, s1}) edge_maximum(p, s, t0, t1, false);
+        return;
+      }
       upper = kInf;
       auto along = [&](double ux, double uy) {
         const double n = length(ux, uy);
@@ -274,7 +323,7 @@ class ConeSearch {
   int max_depth_;
   int zx_ = 0, zy_ = 0;
   double cx_ = 0, cy_ = 0, sc_ = 0, tc_ = 0;
-  bool touches_ = false;
+  bool touches_ = false, boundary_max_ = false;
 };
 
 // Bounds of S over power-of-two blocks of texels: level L, node (nx, ny) covers texels
