@@ -80,6 +80,12 @@ double rect_distance(const Rect& r, const Rect& f) {
 // footprint F with apex T: the reciprocal of the cone ratio in texels per unit height.
 // `psi` is attained at a point of the surface; `bound` is the largest upper bound of a piece
 // dismissed within the tolerance. The answer lies in [psi, max(psi, bound)].
+//
+// What is returned is level() = max(psi, bound), so a region whose upper bound is at most
+// level() cannot change it (what it holds is attained below the bound, or bounded by it):
+// every test prunes against level(), not psi. This matters where a bound had to be kept
+// (relaxed cones near the edge of the region seen descending): regions no steeper than the
+// bound already conceded are then left alone instead of refined to the depth cap.
 class ConeSearch {
  public:
   ConeSearch(const Rect& footprint, double top, bool relaxed, double tolerance)
@@ -87,6 +93,7 @@ class ConeSearch {
 
   double psi = 0;
   double bound = 0;
+  double level() const { return std::max(psi, bound); }
 
   void piece(const Piece& p) {
     const double px1 = p.x0 + 0.5, py1 = p.y0 + 0.5;
@@ -260,7 +267,7 @@ class ConeSearch {
         near_y = std::min(near_y, oy[k]);
       }
       // First the plain bound (max S - T) / (nearest distance): most pieces end here.
-      if (vmax - top_ <= psi * length(near_x, near_y)) return;
+      if (vmax - top_ <= level() * length(near_x, near_y)) return;
       if (boundary_max_ && (!relaxed_ || descends_throughout(p, s0, t0, s1, t1))) {
         // The supremum is on the boundary (relaxed: every point counts, so the same one).
         for (int k = 0; k < 4; ++k) attain(p, ss[k], ts[k], v[k]);
@@ -282,7 +289,7 @@ class ConeSearch {
       };
       // The centre first, then the corners, until one settles it.
       along(ox[0] + ox[3], oy[0] + oy[3]);
-      for (int k = 0; k < 4 && upper > psi; ++k) along(ox[k], oy[k]);
+      for (int k = 0; k < 4 && upper > level(); ++k) along(ox[k], oy[k]);
       if (touches_) {
         // Mean value bound from c: S(y) - T <= S(c) - T + (grad S(xi) . u) |y - c|, u the
         // unit direction from c into the zone's quadrant and xi on the segment, inside the
@@ -302,11 +309,11 @@ class ConeSearch {
         if (far > 0) upper = std::min(upper, g + (p.value(sc_, tc_) - top_) / far);
       }
     }
-    if (upper <= psi) return;
+    if (upper <= level()) return;
     for (int k = 0; k < 4; ++k) attain(p, ss[k], ts[k], v[k]);
     const double sm = 0.5 * (s0 + s1), tm = 0.5 * (t0 + t1);
     attain(p, sm, tm, p.value(sm, tm));
-    if (upper <= psi * (1 + tol_) || depth >= max_depth_) {
+    if (upper <= std::max(psi * (1 + tol_), bound) || depth >= max_depth_) {
       bound = std::max(bound, upper);
       return;
     }
@@ -618,14 +625,14 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
                          ox + std::min(static_cast<double>(n.x + 1) * size, static_cast<double>(w)),
                          oy + std::min(static_cast<double>(n.y + 1) * size, static_cast<double>(h))};
             const double d = rect_distance(r, f);
-            if (d > 0 && (m - t) / d <= search.psi) continue;
+            if (d > 0 && (m - t) / d <= search.level()) continue;
             // Under the cone of the slope found: nothing to gain. Under the cone of that slope
             // widened by the tolerance: the node is dismissed and the widened slope kept as
             // the bound (the stored cone may be that much narrower, never wider).
             auto under = [&](const float* plane) {
-              if (plane_excess(plane, r, f, t, search.psi) <= 0) return true;
+              if (plane_excess(plane, r, f, t, search.level()) <= 0) return true;
               const double widened = search.psi * (1 + o.tolerance);
-              if (search.psi > 0 && plane_excess(plane, r, f, t, widened) <= 0) {
+              if (widened > search.bound && plane_excess(plane, r, f, t, widened) <= 0) {
                 search.bound = std::max(search.bound, widened);
                 return true;
               }
@@ -667,21 +674,21 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
           }
         };
         visit(0, 0);
-        if (field.border == Border::wrap && search.psi > 0) {
-          // Copies of the tile: none farther than (global max - T) / psi can hold a steeper point.
-          const double reach = (global_max - t) / search.psi;
+        if (field.border == Border::wrap && search.level() > 0) {
+          // Copies of the tile: none farther than (global max - T) / level can hold a steeper point.
+          const double reach = (global_max - t) / search.level();
           const int ax = static_cast<int>(std::ceil(reach / w)) + 1, ay = static_cast<int>(std::ceil(reach / h)) + 1;
           for (int b = -ay; b <= ay; ++b)
             for (int a = -ax; a <= ax; ++a) {
               if (a == 0 && b == 0) continue;
               const Rect r{static_cast<double>(a) * w, static_cast<double>(b) * h, (a + 1.0) * w, (b + 1.0) * h};
               const double d = rect_distance(r, f);
-              if (d > 0 && (global_max - t) / d <= search.psi) continue;
+              if (d > 0 && (global_max - t) / d <= search.level()) continue;
               visit(static_cast<double>(a) * w, static_cast<double>(b) * h);
             }
         }
         previous = search.best;
-        return std::pair{std::max(search.psi, search.bound), search.bound > search.psi * (1 + o.tolerance)};
+        return std::pair{search.level(), search.bound > search.psi * (1 + o.tolerance)};
         };
         auto [psi, loose] = search_texel(relaxed, relaxed ? previous_relaxed : previous_conservative);
         // A relaxed cone is never narrower than the conservative one (which satisfies the
