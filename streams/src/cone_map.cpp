@@ -596,6 +596,7 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
   tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {
     struct Node {
       int level, x, y;
+      double d;  // distance to the footprint, computed once when the node is pushed
     };
     std::vector<Node> stack;
     for (int j = rows.begin(); j < rows.end(); ++j) {
@@ -614,7 +615,7 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
         // first; a node whose maximum cannot beat the slope attained so far is skipped.
         auto visit = [&](double ox, double oy) {
           stack.clear();
-          stack.push_back({root, 0, 0});
+          stack.push_back({root, 0, 0, rect_distance(Rect{ox, oy, ox + w, oy + h}, f)});
           while (!stack.empty()) {
             const Node n = stack.back();
             stack.pop_back();
@@ -624,7 +625,7 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
             const Rect r{ox + static_cast<double>(n.x) * size, oy + static_cast<double>(n.y) * size,
                          ox + std::min(static_cast<double>(n.x + 1) * size, static_cast<double>(w)),
                          oy + std::min(static_cast<double>(n.y + 1) * size, static_cast<double>(h))};
-            const double d = rect_distance(r, f);
+            const double d = n.d;
             if (d > 0 && (m - t) / d <= search.level()) continue;
             // Under the cone of the slope found: nothing to gain. Under the cone of that slope
             // widened by the tolerance: the node is dismissed and the widened slope kept as
@@ -655,7 +656,7 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
                   search.piece(Piece(ox + 0.5 * a, oy + 0.5 * b, g.at(a, b), g.at(a + 1, b), g.at(a, b + 1), g.at(a + 1, b + 1)));
               continue;
             }
-            std::array<std::pair<double, Node>, 4> kids;
+            std::array<Node, 4> kids;
             int count = 0;
             const int l = n.level - 1;
             for (int cy = 2 * n.y; cy <= std::min(2 * n.y + 1, tree.h[static_cast<size_t>(l)] - 1); ++cy)
@@ -664,13 +665,13 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
                 const Rect cr{ox + static_cast<double>(cx) * cs, oy + static_cast<double>(cy) * cs,
                               ox + std::min(static_cast<double>(cx + 1) * cs, static_cast<double>(w)),
                               oy + std::min(static_cast<double>(cy + 1) * cs, static_cast<double>(h))};
-                kids[static_cast<size_t>(count++)] = {rect_distance(cr, f), Node{l, cx, cy}};
+                kids[static_cast<size_t>(count++)] = Node{l, cx, cy, rect_distance(cr, f)};
               }
             // Farthest pushed first, so the nearest is searched first (insertion sort of <= 4).
             for (int a = 1; a < count; ++a)
-              for (int b = a; b > 0 && kids[static_cast<size_t>(b - 1)].first < kids[static_cast<size_t>(b)].first; --b)
+              for (int b = a; b > 0 && kids[static_cast<size_t>(b - 1)].d < kids[static_cast<size_t>(b)].d; --b)
                 std::swap(kids[static_cast<size_t>(b - 1)], kids[static_cast<size_t>(b)]);
-            for (int k = 0; k < count; ++k) stack.push_back(kids[static_cast<size_t>(k)].second);
+            for (int k = 0; k < count; ++k) stack.push_back(kids[static_cast<size_t>(k)]);
           }
         };
         visit(0, 0);
