@@ -405,20 +405,10 @@ MaxTree max_tree(std::vector<float> top, const HalfGrid& grid, int width, int he
   t.w.push_back(width);
   t.h.push_back(height);
   t.level.push_back(std::move(top));
+  // Level 0 keeps no planes or gradient boxes (7 floats a texel, the largest arrays of the
+  // build): level 1 computes its children's from the grid, and so does the search.
   t.plane.emplace_back();
   t.gradient.emplace_back();
-  // Level-0 planes (texel_plane), kept only to build level 1; the search recomputes them.
-  std::vector<float> p0(static_cast<size_t>(width) * static_cast<size_t>(height) * 3);
-  std::vector<float> g0(static_cast<size_t>(width) * static_cast<size_t>(height) * 4);
-  tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
-    for (int j = rows.begin(); j < rows.end(); ++j)
-      for (int i = 0; i < width; ++i) {
-        texel_plane(grid, i, j, &p0[(static_cast<size_t>(j) * static_cast<size_t>(width) + static_cast<size_t>(i)) * 3]);
-        texel_gradients(grid, i, j, &g0[(static_cast<size_t>(j) * static_cast<size_t>(width) + static_cast<size_t>(i)) * 4]);
-      }
-  });
-  const std::vector<float>* fine_plane = &p0;
-  const std::vector<float>* fine_gradient = &g0;
   while (t.w.back() > 1 || t.h.back() > 1) {
     const int l = static_cast<int>(t.w.size()) - 1;  // the finer level
     const int fw = t.w.back(), fh = t.h.back(), cw = (fw + 1) / 2, ch = (fh + 1) / 2;
@@ -427,6 +417,8 @@ MaxTree max_tree(std::vector<float> top, const HalfGrid& grid, int width, int he
     std::vector<float> cp(c.size() * 3);
     std::vector<float> cg(c.size() * 4);
     const std::vector<float>& fine = t.level.back();
+    const std::vector<float>& fine_plane = t.plane.back();
+    const std::vector<float>& fine_gradient = t.gradient.back();
     auto rect_of = [&](double size, int x, int y, double& x0, double& y0, double& x1, double& y1) {
       x0 = x * size;
       y0 = y * size;
@@ -436,19 +428,37 @@ MaxTree max_tree(std::vector<float> top, const HalfGrid& grid, int width, int he
     tbb::parallel_for(tbb::blocked_range<int>(0, ch), [&](const tbb::blocked_range<int>& rows) {
       for (int y = rows.begin(); y < rows.end(); ++y)
         for (int x = 0; x < cw; ++x) {
-          float m = -1.0f;
-          double gx = 0, gy = 0, weight = 0;
+          // The node's children (up to 4): maximum, plane, gradient box.
+          struct Child {
+            float m, plane[3], box[4];
+            double x0, y0, x1, y1;
+          };
+          std::array<Child, 4> kids{};
+          int count = 0;
           for (int yy = 2 * y; yy <= std::min(2 * y + 1, fh - 1); ++yy)
             for (int xx = 2 * x; xx <= std::min(2 * x + 1, fw - 1); ++xx) {
-              const size_t k = static_cast<size_t>(yy) * static_cast<size_t>(fw) + static_cast<size_t>(xx);
-              m = std::max(m, fine[k]);
-              double x0, y0, x1, y1;
-              rect_of(fs, xx, yy, x0, y0, x1, y1);
-              const double area = (x1 - x0) * (y1 - y0);
-              gx += area * (*fine_plane)[k * 3 + 1];
-              gy += area * (*fine_plane)[k * 3 + 2];
-              weight += area;
+              Child& k = kids[static_cast<size_t>(count++)];
+              const size_t n = static_cast<size_t>(yy) * static_cast<size_t>(fw) + static_cast<size_t>(xx);
+              k.m = fine[n];
+              if (l == 0) {
+                texel_plane(grid, xx, yy, k.plane);
+                texel_gradients(grid, xx, yy, k.box);
+              } else {
+                std::copy_n(&fine_plane[n * 3], 3, k.plane);
+                std::copy_n(&fine_gradient[n * 4], 4, k.box);
+              }
+              rect_of(fs, xx, yy, k.x0, k.y0, k.x1, k.y1);
             }
+          float m = -1.0f;
+          double gx = 0, gy = 0, weight = 0;
+          for (int i = 0; i < count; ++i) {
+            const Child& k = kids[static_cast<size_t>(i)];
+            m = std::max(m, k.m);
+            const double area = (k.x1 - k.x0) * (k.y1 - k.y0);
+            gx += area * k.plane[1];
+            gy += area * k.plane[2];
+            weight += area;
+          }
           gx /= weight;
           gy /= weight;
           const float fx = static_cast<float>(gx), fy = static_cast<float>(gy);
@@ -458,17 +468,14 @@ MaxTree max_tree(std::vector<float> top, const HalfGrid& grid, int width, int he
           // On a child, S - g_N . (y - c_N) <= a_C + g_C . (y - c_C) - g_N . (y - c_N): affine,
           // so the child's corners bound it.
           double a = -kInf;
-          for (int yy = 2 * y; yy <= std::min(2 * y + 1, fh - 1); ++yy)
-            for (int xx = 2 * x; xx <= std::min(2 * x + 1, fw - 1); ++xx) {
-              const size_t k = static_cast<size_t>(yy) * static_cast<size_t>(fw) + static_cast<size_t>(xx);
-              const double ca = (*fine_plane)[k * 3], cgx = (*fine_plane)[k * 3 + 1], cgy = (*fine_plane)[k * 3 + 2];
-              double x0, y0, x1, y1;
-              rect_of(fs, xx, yy, x0, y0, x1, y1);
-              const double ccx = 0.5 * (x0 + x1), ccy = 0.5 * (y0 + y1);
-              for (double px : {x0, x1})
-                for (double py : {y0, y1})
-                  a = std::max(a, ca + cgx * (px - ccx) + cgy * (py - ccy) - fx * (px - ncx) - fy * (py - ncy));
-            }
+          for (int i = 0; i < count; ++i) {
+            const Child& k = kids[static_cast<size_t>(i)];
+            const double ca = k.plane[0], cgx = k.plane[1], cgy = k.plane[2];
+            const double ccx = 0.5 * (k.x0 + k.x1), ccy = 0.5 * (k.y0 + k.y1);
+            for (double px : {k.x0, k.x1})
+              for (double py : {k.y0, k.y1})
+                a = std::max(a, ca + cgx * (px - ccx) + cgy * (py - ccy) - fx * (px - ncx) - fy * (py - ncy));
+          }
           const size_t n = static_cast<size_t>(y) * static_cast<size_t>(cw) + static_cast<size_t>(x);
           c[n] = m;
           // Never above the node's maximum where that is lower (a flat top): keep both.
@@ -478,14 +485,13 @@ MaxTree max_tree(std::vector<float> top, const HalfGrid& grid, int width, int he
           float* box = &cg[n * 4];
           box[0] = box[2] = std::numeric_limits<float>::infinity();
           box[1] = box[3] = -std::numeric_limits<float>::infinity();
-          for (int yy = 2 * y; yy <= std::min(2 * y + 1, fh - 1); ++yy)
-            for (int xx = 2 * x; xx <= std::min(2 * x + 1, fw - 1); ++xx) {
-              const float* child = &(*fine_gradient)[(static_cast<size_t>(yy) * static_cast<size_t>(fw) + static_cast<size_t>(xx)) * 4];
-              box[0] = std::min(box[0], child[0]);
-              box[1] = std::max(box[1], child[1]);
-              box[2] = std::min(box[2], child[2]);
-              box[3] = std::max(box[3], child[3]);
-            }
+          for (int i = 0; i < count; ++i) {
+            const float* child = kids[static_cast<size_t>(i)].box;
+            box[0] = std::min(box[0], child[0]);
+            box[1] = std::max(box[1], child[1]);
+            box[2] = std::min(box[2], child[2]);
+            box[3] = std::max(box[3], child[3]);
+          }
         }
     });
     t.w.push_back(cw);
@@ -493,8 +499,6 @@ MaxTree max_tree(std::vector<float> top, const HalfGrid& grid, int width, int he
     t.level.push_back(std::move(c));
     t.plane.push_back(std::move(cp));
     t.gradient.push_back(std::move(cg));
-    fine_plane = &t.plane.back();
-    fine_gradient = &t.gradient.back();
   }
   return t;
 }
@@ -587,7 +591,8 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
         for (int a = 2 * i; a <= 2 * i + 2; ++a) m = std::max(m, g.at(a, b));
       top[static_cast<size_t>(j) * static_cast<size_t>(w) + static_cast<size_t>(i)] = m;
     }
-  const MaxTree tree = max_tree(top, g, w, h);
+  const MaxTree tree = max_tree(std::move(top), g, w, h);
+  const std::vector<float>& apex = tree.level[0];
   const int root = static_cast<int>(tree.level.size()) - 1;
   const double global_max = tree.at(root, 0, 0);
   const bool relaxed = o.kind == ConeKind::relaxed;
@@ -604,7 +609,7 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
       // threads.
       ConeSearch::Point previous_conservative, previous_relaxed;
       for (int i = 0; i < w; ++i) {
-        const double t = top[static_cast<size_t>(j) * static_cast<size_t>(w) + static_cast<size_t>(i)];
+        const double t = apex[static_cast<size_t>(j) * static_cast<size_t>(w) + static_cast<size_t>(i)];
         const Rect f{static_cast<double>(i), static_cast<double>(j), i + 1.0, j + 1.0};
         // One search: the supremum of the slope (relaxed: over points seen descending),
         // seeded with the steepest point of the texel before it in this row.
