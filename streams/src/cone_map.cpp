@@ -612,8 +612,9 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
         const double t = apex[static_cast<size_t>(j) * static_cast<size_t>(w) + static_cast<size_t>(i)];
         const Rect f{static_cast<double>(i), static_cast<double>(j), i + 1.0, j + 1.0};
         // One search: the supremum of the slope (relaxed: over points seen descending),
-        // seeded with the steepest point of the texel before it in this row.
-        auto search_texel = [&](bool relaxed_kind, ConeSearch::Point& previous) {
+        // seeded with the steepest point of the texel before it in this row. It stops once
+        // a slope of `cap` is attained: the caller only needs min(cap, supremum).
+        auto search_texel = [&](bool relaxed_kind, ConeSearch::Point& previous, double cap) {
         ConeSearch search(f, t, relaxed_kind, o.tolerance);
         search.seed(previous);
         // Depth-first over one copy of the map shifted by (ox, oy) pixels, nearest child
@@ -621,7 +622,7 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
         auto visit = [&](double ox, double oy) {
           stack.clear();
           stack.push_back({root, 0, 0, rect_distance(Rect{ox, oy, ox + w, oy + h}, f)});
-          while (!stack.empty()) {
+          while (!stack.empty() && search.psi < cap) {
             const Node n = stack.back();
             stack.pop_back();
             const double m = tree.at(n.level, n.x, n.y);
@@ -696,11 +697,11 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
         previous = search.best;
         return std::pair{search.level(), search.bound > search.psi * (1 + o.tolerance)};
         };
-        auto [psi, loose] = search_texel(relaxed, relaxed ? previous_relaxed : previous_conservative);
+        auto [psi, loose] = search_texel(relaxed, relaxed ? previous_relaxed : previous_conservative, kInf);
         // A relaxed cone is never narrower than the conservative one (which satisfies the
         // relaxed condition too); where the relaxed search kept a loose bound (near a fan)
         // the conservative search decides.
-        if (relaxed && loose) psi = std::min(psi, search_texel(false, previous_conservative).first);
+        if (relaxed && loose) psi = std::min(psi, search_texel(false, previous_conservative, psi).first);
         const double ratio = psi > 0 ? 1.0 / (psi * w) : kInf;  // texels -> units of u
         out.at(i, j, 0) = field.height.at(i, j);
         out.at(i, j, 1) = round_down(std::min(ratio, static_cast<double>(kConeRatioCap)), o.half);
