@@ -649,9 +649,11 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
             if (relaxed_kind && n.level > 0 && rises_away(&tree.gradient[static_cast<size_t>(n.level)][tree.index(n.level, n.x, n.y) * 4], r, f))
               continue;
             if (n.level == 0) {
-              std::array<float, 3> plane{};
-              texel_plane(g, n.x, n.y, plane.data());
-              if (d > 0 && under(plane.data())) continue;
+              if (d > 0) {  // as for larger nodes, the plane is tested only apart from F
+                std::array<float, 3> plane{};
+                texel_plane(g, n.x, n.y, plane.data());
+                if (under(plane.data())) continue;
+              }
               if (relaxed_kind) {
                 std::array<float, 4> box{};
                 texel_gradients(g, n.x, n.y, box.data());
