@@ -115,7 +115,8 @@ class ConeSearch {
       // Unless S(c) < T and e zx zy < 0 (then psi is concave in r and may peak inside), psi
       // is monotone or convex along every ray, so its supremum over a rectangle of the piece
       // lies on the rectangle's boundary, where exact one-dimensional maxima settle it.
-      // (sc_, tc_ are integers, and the values floats, so S(c) is exact in double.)
+      // (sc_, tc_ are integers and the grid values floats: S(c) is a sum of float differences
+      // with small integer weights, exact in double unless heights span 2^29 in magnitude.)
       boundary_max_ = !(p.value(sc_, tc_) < top_ && p.e * zx_ * zy_ < 0);
     }
     if (zx_ != 0 && zy_ != 0 && touches_ && p.value(sc_, tc_) >= top_) attain_corner_limit(p);
@@ -269,7 +270,8 @@ class ConeSearch {
       // First the plain bound (max S - T) / (nearest distance): most pieces end here.
       if (vmax - top_ <= level() * length(near_x, near_y)) return;
       if (boundary_max_ && (!relaxed_ || descends_throughout(p, s0, t0, s1, t1))) {
-        // The supremum is on the boundary (relaxed: every point counts, so the same one).
+        // The supremum is on the boundary. (Relaxed cones only where one corner of F sees
+        // the whole rectangle descend: there every point counts, as for conservative ones.)
         for (int k = 0; k < 4; ++k) attain(p, ss[k], ts[k], v[k]);
         for (double t : {t0, t1}) edge_maximum(p, t, s0, s1, true);
         for (double s : {s0, s1}) edge_maximum(p, s, t0, t1, false);
