@@ -80,6 +80,12 @@ double rect_distance(const Rect& r, const Rect& f) {
 // footprint F with apex T: the reciprocal of the cone ratio in texels per unit height.
 // `psi` is attained at a point of the surface; `bound` is the largest upper bound of a piece
 // dismissed within the tolerance. The answer lies in [psi, max(psi, bound)].
+//
+// What is returned is level() = max(psi, bound), so a region whose upper bound is at most
+// level() cannot change it (what it holds is attained below the bound, or bounded by it):
+// every test prunes against level(), not psi. This matters where a bound had to be kept
+// (relaxed cones near the edge of the region seen descending): regions no steeper than the
+// bound already conceded are then left alone instead of refined to the depth cap.
 class ConeSearch {
  public:
   ConeSearch(const Rect& footprint, double top, bool relaxed, double tolerance)
@@ -87,6 +93,7 @@ class ConeSearch {
 
   double psi = 0;
   double bound = 0;
+  double level() const { return std::max(psi, bound); }
 
   void piece(const Piece& p) {
     const double px1 = p.x0 + 0.5, py1 = p.y0 + 0.5;
@@ -99,8 +106,18 @@ class ConeSearch {
       cx_ = zx_ > 0 ? f_.x1 : f_.x0;
       cy_ = zy_ > 0 ? f_.y1 : f_.y0;
       touches_ = (cx_ == p.x0 || cx_ == px1) && (cy_ == p.y0 || cy_ == py1);
-      sc_ = cx_ == p.x0 ? 0.0 : 1.0;
-      tc_ = cy_ == p.y0 ? 0.0 : 1.0;
+      sc_ = 2 * (cx_ - p.x0);
+      tc_ = 2 * (cy_ - p.y0);
+      // Along a ray y = c + r u out of c (u a unit vector into the zone's quadrant), the
+      // piece's polynomial is quadratic in r: S = S(c) + r grad S(c) . u + r^2 4 e zx zy ux uy
+      // (S(c) and grad S(c) of the polynomial extended to c), and dist(y, F) = r, so
+      //     psi = (S(c) - T) / r + grad S(c) . u + r 4 e zx zy ux uy.
+      // Unless S(c) < T and e zx zy < 0 (then psi is concave in r and may peak inside), psi
+      // is monotone or convex along every ray, so its supremum over a rectangle of the piece
+      // lies on the rectangle's boundary, where exact one-dimensional maxima settle it.
+      // (sc_, tc_ are integers and the grid values floats: S(c) is a sum of float differences
+      // with small integer weights, exact in double unless heights span 2^29 in magnitude.)
+      boundary_max_ = !(p.value(sc_, tc_) < top_ && p.e * zx_ * zy_ < 0);
     }
     if (zx_ != 0 && zy_ != 0 && touches_ && p.value(sc_, tc_) >= top_) attain_corner_limit(p);
     refine(p, 0, 0, 1, 1, 0);
@@ -128,6 +145,39 @@ class ConeSearch {
       for (double t : {t0, t1})
         if (descends(p, s, t)) return false;
     return true;
+  }
+  // Some single corner of F sees the whole rectangle descend: grad S(y) . (y - x) is
+  // bilinear in y (see never_descends), so negative at the rectangle's corners means
+  // negative throughout.
+  bool descends_throughout(const Piece& p, double s0, double t0, double s1, double t1) const {
+    for (double fx : {f_.x0, f_.x1})
+      for (double fy : {f_.y0, f_.y1}) {
+        bool all = true;
+        for (double s : {s0, s1})
+          for (double t : {t0, t1}) all = all && p.gx(t) * (p.x(s) - fx) + p.gy(s) * (p.y(t) - fy) < 0;
+        if (all) return true;
+      }
+    return false;
+  }
+  // The interior maximum of psi along an edge of a corner-zone rectangle: `fixed` is t (an
+  // edge along x, `along_x`) or s, the edge runs over [lo, hi] of the other coordinate. With
+  // q the offset from c along the edge and k the fixed offset across it, S is linear,
+  // S - T = A + B q, and psi(q) = (A + B q) / sqrt(k^2 + q^2) has its one stationary point
+  // where B (k^2 + q^2) = (A + B q) q, at q = B k^2 / A. Its ends are the rectangle's corners.
+  void edge_maximum(const Piece& p, double fixed, double lo, double hi, bool along_x) {
+    const double z = along_x ? zx_ : zy_;
+    const double c_local = along_x ? sc_ : tc_;  // c's position along the edge, local
+    const double k = along_x ? (p.y(fixed) - cy_) * zy_ : (p.x(fixed) - cx_) * zx_;
+    const double a = (along_x ? p.value(c_local, fixed) : p.value(fixed, c_local)) - top_;
+    const double b = 2 * z * (along_x ? p.a + p.e * fixed : p.b + p.e * fixed);  // dS/dq
+    if (a == 0) return;  // psi monotone in q: the ends decide
+    const double local = c_local + 2 * z * (b * k * k / a);
+    if (!(local > lo && local < hi)) return;
+    if (along_x) {
+      attain(p, local, fixed, p.value(local, fixed));
+    } else {
+      attain(p, fixed, local, p.value(fixed, local));
+    }
   }
   void attain(const Piece& p, double s, double t, double v) {
     const double d = distance(p.x(s), p.y(t));
@@ -218,7 +268,15 @@ class ConeSearch {
         near_y = std::min(near_y, oy[k]);
       }
       // First the plain bound (max S - T) / (nearest distance): most pieces end here.
-      if (vmax - top_ <= psi * length(near_x, near_y)) return;
+      if (vmax - top_ <= level() * length(near_x, near_y)) return;
+      if (boundary_max_ && (!relaxed_ || descends_throughout(p, s0, t0, s1, t1))) {
+        // The supremum is on the boundary. (Relaxed cones only where one corner of F sees
+        // the whole rectangle descend: there every point counts, as for conservative ones.)
+        for (int k = 0; k < 4; ++k) attain(p, ss[k], ts[k], v[k]);
+        for (double t : {t0, t1}) edge_maximum(p, t, s0, s1, true);
+        for (double s : {s0, s1}) edge_maximum(p, s, t0, t1, false);
+        return;
+      }
       upper = kInf;
       auto along = [&](double ux, double uy) {
         const double n = length(ux, uy);
@@ -233,7 +291,7 @@ class ConeSearch {
       };
       // The centre first, then the corners, until one settles it.
       along(ox[0] + ox[3], oy[0] + oy[3]);
-      for (int k = 0; k < 4 && upper > psi; ++k) along(ox[k], oy[k]);
+      for (int k = 0; k < 4 && upper > level(); ++k) along(ox[k], oy[k]);
       if (touches_) {
         // Mean value bound from c: S(y) - T <= S(c) - T + (grad S(xi) . u) |y - c|, u the
         // unit direction from c into the zone's quadrant and xi on the segment, inside the
@@ -253,11 +311,11 @@ class ConeSearch {
         if (far > 0) upper = std::min(upper, g + (p.value(sc_, tc_) - top_) / far);
       }
     }
-    if (upper <= psi) return;
+    if (upper <= level()) return;
     for (int k = 0; k < 4; ++k) attain(p, ss[k], ts[k], v[k]);
     const double sm = 0.5 * (s0 + s1), tm = 0.5 * (t0 + t1);
     attain(p, sm, tm, p.value(sm, tm));
-    if (upper <= psi * (1 + tol_) || depth >= max_depth_) {
+    if (upper <= std::max(psi * (1 + tol_), bound) || depth >= max_depth_) {
       bound = std::max(bound, upper);
       return;
     }
@@ -274,7 +332,7 @@ class ConeSearch {
   int max_depth_;
   int zx_ = 0, zy_ = 0;
   double cx_ = 0, cy_ = 0, sc_ = 0, tc_ = 0;
-  bool touches_ = false;
+  bool touches_ = false, boundary_max_ = false;
 };
 
 // Bounds of S over power-of-two blocks of texels: level L, node (nx, ny) covers texels
@@ -349,20 +407,10 @@ MaxTree max_tree(std::vector<float> top, const HalfGrid& grid, int width, int he
   t.w.push_back(width);
   t.h.push_back(height);
   t.level.push_back(std::move(top));
+  // Level 0 keeps no planes or gradient boxes (7 floats a texel, the largest arrays of the
+  // build): level 1 computes its children's from the grid, and so does the search.
   t.plane.emplace_back();
   t.gradient.emplace_back();
-  // Level-0 planes (texel_plane), kept only to build level 1; the search recomputes them.
-  std::vector<float> p0(static_cast<size_t>(width) * static_cast<size_t>(height) * 3);
-  std::vector<float> g0(static_cast<size_t>(width) * static_cast<size_t>(height) * 4);
-  tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
-    for (int j = rows.begin(); j < rows.end(); ++j)
-      for (int i = 0; i < width; ++i) {
-        texel_plane(grid, i, j, &p0[(static_cast<size_t>(j) * static_cast<size_t>(width) + static_cast<size_t>(i)) * 3]);
-        texel_gradients(grid, i, j, &g0[(static_cast<size_t>(j) * static_cast<size_t>(width) + static_cast<size_t>(i)) * 4]);
-      }
-  });
-  const std::vector<float>* fine_plane = &p0;
-  const std::vector<float>* fine_gradient = &g0;
   while (t.w.back() > 1 || t.h.back() > 1) {
     const int l = static_cast<int>(t.w.size()) - 1;  // the finer level
     const int fw = t.w.back(), fh = t.h.back(), cw = (fw + 1) / 2, ch = (fh + 1) / 2;
@@ -371,6 +419,8 @@ MaxTree max_tree(std::vector<float> top, const HalfGrid& grid, int width, int he
     std::vector<float> cp(c.size() * 3);
     std::vector<float> cg(c.size() * 4);
     const std::vector<float>& fine = t.level.back();
+    const std::vector<float>& fine_plane = t.plane.back();
+    const std::vector<float>& fine_gradient = t.gradient.back();
     auto rect_of = [&](double size, int x, int y, double& x0, double& y0, double& x1, double& y1) {
       x0 = x * size;
       y0 = y * size;
@@ -380,19 +430,37 @@ MaxTree max_tree(std::vector<float> top, const HalfGrid& grid, int width, int he
     tbb::parallel_for(tbb::blocked_range<int>(0, ch), [&](const tbb::blocked_range<int>& rows) {
       for (int y = rows.begin(); y < rows.end(); ++y)
         for (int x = 0; x < cw; ++x) {
-          float m = -1.0f;
-          double gx = 0, gy = 0, weight = 0;
+          // The node's children (up to 4): maximum, plane, gradient box.
+          struct Child {
+            float m, plane[3], box[4];
+            double x0, y0, x1, y1;
+          };
+          std::array<Child, 4> kids{};
+          int count = 0;
           for (int yy = 2 * y; yy <= std::min(2 * y + 1, fh - 1); ++yy)
             for (int xx = 2 * x; xx <= std::min(2 * x + 1, fw - 1); ++xx) {
-              const size_t k = static_cast<size_t>(yy) * static_cast<size_t>(fw) + static_cast<size_t>(xx);
-              m = std::max(m, fine[k]);
-              double x0, y0, x1, y1;
-              rect_of(fs, xx, yy, x0, y0, x1, y1);
-              const double area = (x1 - x0) * (y1 - y0);
-              gx += area * (*fine_plane)[k * 3 + 1];
-              gy += area * (*fine_plane)[k * 3 + 2];
-              weight += area;
+              Child& k = kids[static_cast<size_t>(count++)];
+              const size_t n = static_cast<size_t>(yy) * static_cast<size_t>(fw) + static_cast<size_t>(xx);
+              k.m = fine[n];
+              if (l == 0) {
+                texel_plane(grid, xx, yy, k.plane);
+                texel_gradients(grid, xx, yy, k.box);
+              } else {
+                std::copy_n(&fine_plane[n * 3], 3, k.plane);
+                std::copy_n(&fine_gradient[n * 4], 4, k.box);
+              }
+              rect_of(fs, xx, yy, k.x0, k.y0, k.x1, k.y1);
             }
+          float m = -1.0f;
+          double gx = 0, gy = 0, weight = 0;
+          for (int i = 0; i < count; ++i) {
+            const Child& k = kids[static_cast<size_t>(i)];
+            m = std::max(m, k.m);
+            const double area = (k.x1 - k.x0) * (k.y1 - k.y0);
+            gx += area * k.plane[1];
+            gy += area * k.plane[2];
+            weight += area;
+          }
           gx /= weight;
           gy /= weight;
           const float fx = static_cast<float>(gx), fy = static_cast<float>(gy);
@@ -402,17 +470,14 @@ MaxTree max_tree(std::vector<float> top, const HalfGrid& grid, int width, int he
           // On a child, S - g_N . (y - c_N) <= a_C + g_C . (y - c_C) - g_N . (y - c_N): affine,
           // so the child's corners bound it.
           double a = -kInf;
-          for (int yy = 2 * y; yy <= std::min(2 * y + 1, fh - 1); ++yy)
-            for (int xx = 2 * x; xx <= std::min(2 * x + 1, fw - 1); ++xx) {
-              const size_t k = static_cast<size_t>(yy) * static_cast<size_t>(fw) + static_cast<size_t>(xx);
-              const double ca = (*fine_plane)[k * 3], cgx = (*fine_plane)[k * 3 + 1], cgy = (*fine_plane)[k * 3 + 2];
-              double x0, y0, x1, y1;
-              rect_of(fs, xx, yy, x0, y0, x1, y1);
-              const double ccx = 0.5 * (x0 + x1), ccy = 0.5 * (y0 + y1);
-              for (double px : {x0, x1})
-                for (double py : {y0, y1})
-                  a = std::max(a, ca + cgx * (px - ccx) + cgy * (py - ccy) - fx * (px - ncx) - fy * (py - ncy));
-            }
+          for (int i = 0; i < count; ++i) {
+            const Child& k = kids[static_cast<size_t>(i)];
+            const double ca = k.plane[0], cgx = k.plane[1], cgy = k.plane[2];
+            const double ccx = 0.5 * (k.x0 + k.x1), ccy = 0.5 * (k.y0 + k.y1);
+            for (double px : {k.x0, k.x1})
+              for (double py : {k.y0, k.y1})
+                a = std::max(a, ca + cgx * (px - ccx) + cgy * (py - ccy) - fx * (px - ncx) - fy * (py - ncy));
+          }
           const size_t n = static_cast<size_t>(y) * static_cast<size_t>(cw) + static_cast<size_t>(x);
           c[n] = m;
           // Never above the node's maximum where that is lower (a flat top): keep both.
@@ -422,14 +487,13 @@ MaxTree max_tree(std::vector<float> top, const HalfGrid& grid, int width, int he
           float* box = &cg[n * 4];
           box[0] = box[2] = std::numeric_limits<float>::infinity();
           box[1] = box[3] = -std::numeric_limits<float>::infinity();
-          for (int yy = 2 * y; yy <= std::min(2 * y + 1, fh - 1); ++yy)
-            for (int xx = 2 * x; xx <= std::min(2 * x + 1, fw - 1); ++xx) {
-              const float* child = &(*fine_gradient)[(static_cast<size_t>(yy) * static_cast<size_t>(fw) + static_cast<size_t>(xx)) * 4];
-              box[0] = std::min(box[0], child[0]);
-              box[1] = std::max(box[1], child[1]);
-              box[2] = std::min(box[2], child[2]);
-              box[3] = std::max(box[3], child[3]);
-            }
+          for (int i = 0; i < count; ++i) {
+            const float* child = kids[static_cast<size_t>(i)].box;
+            box[0] = std::min(box[0], child[0]);
+            box[1] = std::max(box[1], child[1]);
+            box[2] = std::min(box[2], child[2]);
+            box[3] = std::max(box[3], child[3]);
+          }
         }
     });
     t.w.push_back(cw);
@@ -437,8 +501,6 @@ MaxTree max_tree(std::vector<float> top, const HalfGrid& grid, int width, int he
     t.level.push_back(std::move(c));
     t.plane.push_back(std::move(cp));
     t.gradient.push_back(std::move(cg));
-    fine_plane = &t.plane.back();
-    fine_gradient = &t.gradient.back();
   }
   return t;
 }
@@ -531,7 +593,8 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
         for (int a = 2 * i; a <= 2 * i + 2; ++a) m = std::max(m, g.at(a, b));
       top[static_cast<size_t>(j) * static_cast<size_t>(w) + static_cast<size_t>(i)] = m;
     }
-  const MaxTree tree = max_tree(top, g, w, h);
+  const MaxTree tree = max_tree(std::move(top), g, w, h);
+  const std::vector<float>& apex = tree.level[0];
   const int root = static_cast<int>(tree.level.size()) - 1;
   const double global_max = tree.at(root, 0, 0);
   const bool relaxed = o.kind == ConeKind::relaxed;
@@ -540,6 +603,7 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
   tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {
     struct Node {
       int level, x, y;
+      double d;  // distance to the footprint, computed once when the node is pushed
     };
     std::vector<Node> stack;
     for (int j = rows.begin(); j < rows.end(); ++j) {
@@ -547,19 +611,20 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
       // threads.
       ConeSearch::Point previous_conservative, previous_relaxed;
       for (int i = 0; i < w; ++i) {
-        const double t = top[static_cast<size_t>(j) * static_cast<size_t>(w) + static_cast<size_t>(i)];
+        const double t = apex[static_cast<size_t>(j) * static_cast<size_t>(w) + static_cast<size_t>(i)];
         const Rect f{static_cast<double>(i), static_cast<double>(j), i + 1.0, j + 1.0};
         // One search: the supremum of the slope (relaxed: over points seen descending),
-        // seeded with the steepest point of the texel before it in this row.
-        auto search_texel = [&](bool relaxed_kind, ConeSearch::Point& previous) {
+        // seeded with the steepest point of the texel before it in this row. It stops once
+        // a slope of `cap` is attained: the caller only needs min(cap, supremum).
+        auto search_texel = [&](bool relaxed_kind, ConeSearch::Point& previous, double cap) {
         ConeSearch search(f, t, relaxed_kind, o.tolerance);
         search.seed(previous);
         // Depth-first over one copy of the map shifted by (ox, oy) pixels, nearest child
         // first; a node whose maximum cannot beat the slope attained so far is skipped.
         auto visit = [&](double ox, double oy) {
           stack.clear();
-          stack.push_back({root, 0, 0});
-          while (!stack.empty()) {
+          stack.push_back({root, 0, 0, rect_distance(Rect{ox, oy, ox + w, oy + h}, f)});
+          while (!stack.empty() && search.psi < cap) {
             const Node n = stack.back();
             stack.pop_back();
             const double m = tree.at(n.level, n.x, n.y);
@@ -568,15 +633,15 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
             const Rect r{ox + static_cast<double>(n.x) * size, oy + static_cast<double>(n.y) * size,
                          ox + std::min(static_cast<double>(n.x + 1) * size, static_cast<double>(w)),
                          oy + std::min(static_cast<double>(n.y + 1) * size, static_cast<double>(h))};
-            const double d = rect_distance(r, f);
-            if (d > 0 && (m - t) / d <= search.psi) continue;
+            const double d = n.d;
+            if (d > 0 && (m - t) / d <= search.level()) continue;
             // Under the cone of the slope found: nothing to gain. Under the cone of that slope
             // widened by the tolerance: the node is dismissed and the widened slope kept as
             // the bound (the stored cone may be that much narrower, never wider).
             auto under = [&](const float* plane) {
-              if (plane_excess(plane, r, f, t, search.psi) <= 0) return true;
+              if (plane_excess(plane, r, f, t, search.level()) <= 0) return true;
               const double widened = search.psi * (1 + o.tolerance);
-              if (search.psi > 0 && plane_excess(plane, r, f, t, widened) <= 0) {
+              if (widened > search.bound && plane_excess(plane, r, f, t, widened) <= 0) {
                 search.bound = std::max(search.bound, widened);
                 return true;
               }
@@ -586,9 +651,11 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
             if (relaxed_kind && n.level > 0 && rises_away(&tree.gradient[static_cast<size_t>(n.level)][tree.index(n.level, n.x, n.y) * 4], r, f))
               continue;
             if (n.level == 0) {
-              std::array<float, 3> plane{};
-              texel_plane(g, n.x, n.y, plane.data());
-              if (d > 0 && under(plane.data())) continue;
+              if (d > 0) {  // as for larger nodes, the plane is tested only apart from F
+                std::array<float, 3> plane{};
+                texel_plane(g, n.x, n.y, plane.data());
+                if (under(plane.data())) continue;
+              }
               if (relaxed_kind) {
                 std::array<float, 4> box{};
                 texel_gradients(g, n.x, n.y, box.data());
@@ -599,7 +666,7 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
                   search.piece(Piece(ox + 0.5 * a, oy + 0.5 * b, g.at(a, b), g.at(a + 1, b), g.at(a, b + 1), g.at(a + 1, b + 1)));
               continue;
             }
-            std::array<std::pair<double, Node>, 4> kids;
+            std::array<Node, 4> kids;
             int count = 0;
             const int l = n.level - 1;
             for (int cy = 2 * n.y; cy <= std::min(2 * n.y + 1, tree.h[static_cast<size_t>(l)] - 1); ++cy)
@@ -608,37 +675,37 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
                 const Rect cr{ox + static_cast<double>(cx) * cs, oy + static_cast<double>(cy) * cs,
                               ox + std::min(static_cast<double>(cx + 1) * cs, static_cast<double>(w)),
                               oy + std::min(static_cast<double>(cy + 1) * cs, static_cast<double>(h))};
-                kids[static_cast<size_t>(count++)] = {rect_distance(cr, f), Node{l, cx, cy}};
+                kids[static_cast<size_t>(count++)] = Node{l, cx, cy, rect_distance(cr, f)};
               }
             // Farthest pushed first, so the nearest is searched first (insertion sort of <= 4).
             for (int a = 1; a < count; ++a)
-              for (int b = a; b > 0 && kids[static_cast<size_t>(b - 1)].first < kids[static_cast<size_t>(b)].first; --b)
+              for (int b = a; b > 0 && kids[static_cast<size_t>(b - 1)].d < kids[static_cast<size_t>(b)].d; --b)
                 std::swap(kids[static_cast<size_t>(b - 1)], kids[static_cast<size_t>(b)]);
-            for (int k = 0; k < count; ++k) stack.push_back(kids[static_cast<size_t>(k)].second);
+            for (int k = 0; k < count; ++k) stack.push_back(kids[static_cast<size_t>(k)]);
           }
         };
         visit(0, 0);
-        if (field.border == Border::wrap && search.psi > 0) {
-          // Copies of the tile: none farther than (global max - T) / psi can hold a steeper point.
-          const double reach = (global_max - t) / search.psi;
+        if (field.border == Border::wrap && search.level() > 0) {
+          // Copies of the tile: none farther than (global max - T) / level can hold a steeper point.
+          const double reach = (global_max - t) / search.level();
           const int ax = static_cast<int>(std::ceil(reach / w)) + 1, ay = static_cast<int>(std::ceil(reach / h)) + 1;
           for (int b = -ay; b <= ay; ++b)
             for (int a = -ax; a <= ax; ++a) {
               if (a == 0 && b == 0) continue;
               const Rect r{static_cast<double>(a) * w, static_cast<double>(b) * h, (a + 1.0) * w, (b + 1.0) * h};
               const double d = rect_distance(r, f);
-              if (d > 0 && (global_max - t) / d <= search.psi) continue;
+              if (d > 0 && (global_max - t) / d <= search.level()) continue;
               visit(static_cast<double>(a) * w, static_cast<double>(b) * h);
             }
         }
         previous = search.best;
-        return std::pair{std::max(search.psi, search.bound), search.bound > search.psi * (1 + o.tolerance)};
+        return std::pair{search.level(), search.bound > search.psi * (1 + o.tolerance)};
         };
-        auto [psi, loose] = search_texel(relaxed, relaxed ? previous_relaxed : previous_conservative);
+        auto [psi, loose] = search_texel(relaxed, relaxed ? previous_relaxed : previous_conservative, kInf);
         // A relaxed cone is never narrower than the conservative one (which satisfies the
         // relaxed condition too); where the relaxed search kept a loose bound (near a fan)
         // the conservative search decides.
-        if (relaxed && loose) psi = std::min(psi, search_texel(false, previous_conservative).first);
+        if (relaxed && loose) psi = std::min(psi, search_texel(false, previous_conservative, psi).first);
         const double ratio = psi > 0 ? 1.0 / (psi * w) : kInf;  // texels -> units of u
         out.at(i, j, 0) = field.height.at(i, j);
         out.at(i, j, 1) = round_down(std::min(ratio, static_cast<double>(kConeRatioCap)), o.half);

@@ -35,8 +35,10 @@
 //
 // Exactness. Both infima run over the continuous surface: quarter-texel pieces on which S is
 // one bilinear polynomial, searched with a max quadtree of the apex heights and bounded by
-// branch and bound. Side pieces (beside the footprint) are exact at their corners; corner
-// pieces are refined until the bound is within `tolerance` (relative) of a value attained.
+// branch and bound. Side pieces (beside the footprint) are exact at their corners. Corner
+// pieces are exact on their boundary (closed-form maxima along the edges) unless the piece's
+// polynomial is concave along the rays out of F's corner, where they are refined until the
+// bound is within `tolerance` (relative) of a value attained.
 // The stored ratio is always <= the exact one (safe) and >= exact / (1 + tolerance). A texel
 // no higher point can see (the top of the map, a flat map) stores kConeRatioCap.
 #pragma once
