@@ -4,6 +4,7 @@
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <cmath>
 #include <cstdio>
@@ -87,6 +88,29 @@ TEST(UvPack, SameUvsTwice) {
   pack_uv_charts(b, o);
   for (auto f : a.faces())
     for (auto h : face_halfedges(a, f)) ASSERT_EQ(a.texcoord2D(h), b.texcoord2D(h));
+}
+
+// The orientations are searched in parallel and a failing packing stops early: the result
+// must not depend on either (the least (y, x, orientation) wins, whatever the timing).
+TEST(UvPack, SameResultOnOneThreadAndMany) {
+  for (const PackQuality q : {PackQuality::fast, PackQuality::balanced, PackQuality::best}) {
+    Mesh a = scattered_quads(150, 9), b = a;
+    UvPackOptions o;
+    o.size = 512;
+    o.quality = q;
+    UvPackReport ra;
+    {
+      tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+      ra = pack_uv_charts(a, o);
+    }
+    const UvPackReport rb = pack_uv_charts(b, o);
+    EXPECT_EQ(ra.scale, rb.scale);
+    EXPECT_EQ(ra.attempts, rb.attempts);
+    bool same = true;
+    for (auto f : a.faces())
+      for (auto h : face_halfedges(a, f)) same = same && a.texcoord2D(h) == b.texcoord2D(h);
+    EXPECT_TRUE(same) << static_cast<int>(q);
+  }
 }
 
 // --mip-safe K: the checker finds no texel of levels 0..K that mixes charts under bilinear
