@@ -102,6 +102,26 @@ std::vector<std::array<Footprint, 4>> footprints_at(const std::vector<Chart>& ch
   return out;
 }
 
+// In a max tree over `size` leaves (a power of two; node i has children 2i and 2i + 1, the
+// leaves are size..2 size - 1, unused ones 0), the first leaf >= from whose value is at least
+// need (> 0), or -1. Bottom-up: from the leaf, climb until a subtree to the right holds such a
+// value, then descend to its leftmost one; the answer is usually near `from`, so this visits
+// fewer nodes than a descent from the root.
+int first_leaf_at_least(const int* t, int size, int from, int need) {
+  if (from >= size) return -1;
+  size_t i = static_cast<size_t>(from) + static_cast<size_t>(size);
+  while (t[i] < need) {
+    while (i & 1) i >>= 1;  // a right child: its parent's range ends where its own does
+    if (i == 0) return -1;  // climbed past the root: nothing to the right
+    ++i;                    // the subtree just right of the ranges seen so far
+  }
+  while (i < static_cast<size_t>(size)) {
+    i *= 2;
+    if (t[i] < need) ++i;
+  }
+  return static_cast<int>(i) - size;
+}
+
 // Maximum over rows with "the first row at or after `from` whose value is at least `need`" in
 // O(log n): the row scan skips full rows without visiting them.
 class RowMax {
@@ -116,17 +136,10 @@ class RowMax {
     for (i /= 2; i >= 1; i /= 2) tree_[i] = std::max(tree_[2 * i], tree_[2 * i + 1]);
   }
   int value(int row) const { return tree_[static_cast<size_t>(row) + static_cast<size_t>(size_)]; }
-  // The first row >= from with value >= need, or -1.
-  int first_at_least(int from, int need) const { return find(1, 0, size_, from, need); }
+  // The first row >= from with value >= need (> 0), or -1.
+  int first_at_least(int from, int need) const { return first_leaf_at_least(tree_.data(), size_, from, need); }
 
  private:
-  int find(size_t node, int lo, int hi, int from, int need) const {
-    if (hi <= from || tree_[node] < need) return -1;
-    if (hi - lo == 1) return lo;
-    const int mid = (lo + hi) / 2;
-    const int left = find(2 * node, lo, mid, from, need);
-    return left >= 0 ? left : find(2 * node + 1, mid, hi, from, need);
-  }
   int size_;
   std::vector<int> tree_;
 };
@@ -155,18 +168,11 @@ class RowRuns {
          lo /= 2, hi /= 2)
       for (size_t i = lo; i <= hi; ++i) t[i] = std::max(t[2 * i], t[2 * i + 1]);
   }
-  // The first column >= from with rem >= need, or -1.
-  int first_at_least(int row, int from, int need) const { return find(tree_.data() + base(row), 1, 0, size_, from, need); }
+  // The first column >= from with rem >= need (> 0), or -1.
+  int first_at_least(int row, int from, int need) const { return first_leaf_at_least(tree_.data() + base(row), size_, from, need); }
 
  private:
   size_t base(int row) const { return static_cast<size_t>(row) * 2 * static_cast<size_t>(size_); }
-  static int find(const int* t, int node, int lo, int hi, int from, int need) {
-    if (hi <= from || t[node] < need) return -1;
-    if (hi - lo == 1) return lo;
-    const int mid = (lo + hi) / 2;
-    const int left = find(t, 2 * node, lo, mid, from, need);
-    return left >= 0 ? left : find(t, 2 * node + 1, mid, hi, from, need);
-  }
   int size_;
   std::vector<int> tree_;
 };
