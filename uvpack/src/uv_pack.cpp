@@ -519,8 +519,10 @@ UvPackReport pack_uv_charts(Mesh& mesh, const UvPackOptions& o) {
     orders.push_back(sorted_by([](const Chart& c) { return c.area * c.factor * c.factor; }));
   }
 
-  // The scale, per order. The charts' UV area would fill the atlas at s_area; greedy packings
-  // reach 55-99 % of that area, so the search starts at 0.8 s_area. A success whose charts reach
+  // The scale, per order. The charts' UV area would fill the atlas at s_area. Successes aim
+  // well and failures do not (below), so the search starts where most inputs pack: at 0.7 s_area
+  // the charts cover 49 % of the atlas (measured utilisations: 41-99 %; on seven benchmark
+  // inputs 0.7 took 34 packings in all, 0.5, 0.6 and 0.8 35-36). A success whose charts reach
   // a share u of the rows aims the next attempt at 1 / sqrt(u) times its scale (as if the
   // packing kept its density: close when u is well below 1). A failure says little about how
   // far off it was (the last, smallest chart fails as often as a large one), so before a
@@ -533,7 +535,7 @@ UvPackReport pack_uv_charts(Mesh& mesh, const UvPackOptions& o) {
   double lo = 0;
   Attempt best;
   for (const auto& order : orders) {
-    double ok = 0, fail = 0, s = 0.8 * (total_area > 0 ? std::sqrt(n * n / total_area) : n);
+    double ok = 0, fail = 0, s = 0.7 * (total_area > 0 ? std::sqrt(n * n / total_area) : n);
     Attempt found;
     for (int k = 0; k < 60; ++k) {
       ++report.attempts;
