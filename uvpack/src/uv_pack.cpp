@@ -526,9 +526,10 @@ UvPackReport pack_uv_charts(Mesh& mesh, const UvPackOptions& o) {
   // a share u of the rows aims the next attempt at 1 / sqrt(u) times its scale (as if the
   // packing kept its density: close when u is well below 1). A failure says little about how
   // far off it was (the last, smallest chart fails as often as a large one), so before a
-  // success the scale steps down 5 % (or to sqrt(f) times when the charts placed held only a
-  // share f < 0.9 of the texels), and once a success and a failure bracket the answer it is
-  // bisected. A success inside the bracket aims at its own estimate but kept in the middle half
+  // success the scale steps down 5 % (or to sqrt(f) times, at most a halving, when the charts
+  // placed held only a share f < 0.9 of the texels), a success before any failure steps up by
+  // at least the tolerance and at most a doubling, and once a success and a failure bracket the
+  // answer it is bisected. A success inside the bracket aims at its own estimate but kept in the middle half
   // of the bracket (log scale), which so shrinks by at least a quarter; the search stops when
   // the bracket is within the tolerance.
   const double n = o.size;
