@@ -210,9 +210,9 @@ Attempt place_all(const std::vector<Chart>& charts, const std::vector<size_t>& o
     result.fill = static_cast<double>(inside) / static_cast<double>(need);
     return result;
   }
-  // The same bound as the placement goes on: the charts still to place need at least `remaining`
-  // texels that no placed chart blocks, so once fewer are free the packing has failed; stopping
-  // there changes the work, not the outcome.
+  // The same bound while placing: the charts still to place need at least `remaining` texels
+  // that no placed chart blocks, so once fewer are free the packing has failed; stopping there
+  // changes the work, not the outcome.
   size_t remaining = need, free_inside = inside;
   // Texels within `pad` of a placed chart's texel (Chebyshev): a new chart's texels must
   // avoid them. next_free[row * n + col]: the first unblocked column >= col in the row (n
