@@ -102,6 +102,26 @@ std::vector<std::array<Footprint, 4>> footprints_at(const std::vector<Chart>& ch
   return out;
 }
 
+// In a max tree over `size` leaves (a power of two; node i has children 2i and 2i + 1, the
+// leaves are size..2 size - 1, unused ones 0), the first leaf >= from whose value is at least
+// need (> 0), or -1. Bottom-up: from the leaf, climb until a subtree to the right holds such a
+// value, then descend to its leftmost one; the answer is usually near `from`, so this visits
+// fewer nodes than a descent from the root.
+int first_leaf_at_least(const int* t, int size, int from, int need) {
+  if (from >= size) return -1;
+  size_t i = static_cast<size_t>(from) + static_cast<size_t>(size);
+  while (t[i] < need) {
+    while (i & 1) i >>= 1;  // a right child: its parent's range ends where its own does
+    if (i == 0) return -1;  // climbed past the root: nothing to the right
+    ++i;                    // the subtree just right of the ranges seen so far
+  }
+  while (i < static_cast<size_t>(size)) {
+    i *= 2;
+    if (t[i] < need) ++i;
+  }
+  return static_cast<int>(i) - size;
+}
+
 // Maximum over rows with "the first row at or after `from` whose value is at least `need`" in
 // O(log n): the row scan skips full rows without visiting them.
 class RowMax {
@@ -116,17 +136,10 @@ class RowMax {
     for (i /= 2; i >= 1; i /= 2) tree_[i] = std::max(tree_[2 * i], tree_[2 * i + 1]);
   }
   int value(int row) const { return tree_[static_cast<size_t>(row) + static_cast<size_t>(size_)]; }
-  // The first row >= from with value >= need, or -1.
-  int first_at_least(int from, int need) const { return find(1, 0, size_, from, need); }
+  // The first row >= from with value >= need (> 0), or -1.
+  int first_at_least(int from, int need) const { return first_leaf_at_least(tree_.data(), size_, from, need); }
 
  private:
-  int find(size_t node, int lo, int hi, int from, int need) const {
-    if (hi <= from || tree_[node] < need) return -1;
-    if (hi - lo == 1) return lo;
-    const int mid = (lo + hi) / 2;
-    const int left = find(2 * node, lo, mid, from, need);
-    return left >= 0 ? left : find(2 * node + 1, mid, hi, from, need);
-  }
   int size_;
   std::vector<int> tree_;
 };
@@ -155,37 +168,52 @@ class RowRuns {
          lo /= 2, hi /= 2)
       for (size_t i = lo; i <= hi; ++i) t[i] = std::max(t[2 * i], t[2 * i + 1]);
   }
-  // The first column >= from with rem >= need, or -1.
-  int first_at_least(int row, int from, int need) const { return find(tree_.data() + base(row), 1, 0, size_, from, need); }
+  // The first column >= from with rem >= need (> 0), or -1.
+  int first_at_least(int row, int from, int need) const { return first_leaf_at_least(tree_.data() + base(row), size_, from, need); }
 
  private:
   size_t base(int row) const { return static_cast<size_t>(row) * 2 * static_cast<size_t>(size_); }
-  static int find(const int* t, int node, int lo, int hi, int from, int need) {
-    if (hi <= from || t[node] < need) return -1;
-    if (hi - lo == 1) return lo;
-    const int mid = (lo + hi) / 2;
-    const int left = find(t, 2 * node, lo, mid, from, need);
-    return left >= 0 ? left : find(t, 2 * node + 1, mid, hi, from, need);
-  }
   int size_;
   std::vector<int> tree_;
 };
 
-// Greedy placement at scale s; false when some chart finds no room.
-bool place_all(const std::vector<Chart>& charts, const std::vector<size_t>& order, double s, const UvPackOptions& o, int orientations,
-               std::vector<Placement>& where, size_t& touched) {
+// One greedy packing at a scale: whether every chart found room, where, and how far it got,
+// which aims the scale search's next attempt.
+struct Attempt {
+  bool ok = false;
+  std::vector<Placement> where;
+  size_t touched = 0;  // texels the placed charts touch
+  // Succeeded: the rows the charts reach / the rows inside the border margin. Failed: the texels
+  // the atlas was seen to hold (the placed charts', plus the still free ones when fewer were
+  // left than the remaining charts need) / the texels of all charts.
+  double fill = 0;
+};
+
+// Greedy placement at scale s.
+Attempt place_all(const std::vector<Chart>& charts, const std::vector<size_t>& order, double s, const UvPackOptions& o, int orientations) {
+  Attempt result;
+  std::vector<Placement>& where = result.where;
+  size_t& touched = result.touched;
   const int n = o.size, pad = o.mip_safe >= 0 ? std::max(2, o.padding) : std::max(0, o.padding), margin = (std::max(0, o.padding) + 1) / 2;
   const std::vector<std::array<Footprint, 4>> prints = footprints_at(charts, s, orientations);
   // A packing cannot succeed when the charts' texels (each in its smallest orientation)
   // exceed the texels inside the margin: fail before placing anything.
+  std::vector<size_t> least(charts.size());
   size_t need = 0;
-  for (const auto& f : prints) {
-    size_t least = f[0].texels;
-    for (int r = 1; r < orientations; ++r) least = std::min(least, f[static_cast<size_t>(r)].texels);
-    need += least;
+  for (size_t c = 0; c < charts.size(); ++c) {
+    least[c] = prints[c][0].texels;
+    for (int r = 1; r < orientations; ++r) least[c] = std::min(least[c], prints[c][static_cast<size_t>(r)].texels);
+    need += least[c];
   }
   const size_t inside = static_cast<size_t>(std::max(0, n - 2 * margin)) * static_cast<size_t>(std::max(0, n - 2 * margin));
-  if (need > inside) return false;
+  if (need > inside) {
+    result.fill = static_cast<double>(inside) / static_cast<double>(need);
+    return result;
+  }
+  // The same bound while placing: the charts still to place need at least `remaining` texels
+  // that no placed chart blocks, so once fewer are free the packing has failed; stopping there
+  // changes the work, not the outcome.
+  size_t remaining = need, free_inside = inside;
   // Texels within `pad` of a placed chart's texel (Chebyshev): a new chart's texels must
   // avoid them. next_free[row * n + col]: the first unblocked column >= col in the row (n
   // if none), so a scan jumps over blocked runs instead of stepping through them; runs: the
@@ -196,6 +224,15 @@ bool place_all(const std::vector<Chart>& charts, const std::vector<size_t>& orde
   // longest_free: per row the longest free run, so whole rows without room for a footprint's
   // widest run are skipped at once.
   RowMax longest_free(n);
+  // Takes the unblocked texels of columns [a, b] of a row inside the margin off free_inside,
+  // before they are blocked.
+  auto count_free = [&](int row, int a, int b) {
+    if (row < margin || row >= n - margin) return;
+    a = std::max(a, margin);
+    b = std::min(b, n - margin - 1);
+    const auto first = blocked.begin() + static_cast<std::ptrdiff_t>(static_cast<size_t>(row) * static_cast<size_t>(n));
+    if (a <= b) free_inside -= static_cast<size_t>(std::count(first + a, first + b + 1, uint8_t{0}));
+  };
   auto refresh_row = [&](int row) {
     int free_col = n, blocked_col = n;
     int* rem = runs_free.leaves(row);
@@ -215,6 +252,7 @@ bool place_all(const std::vector<Chart>& charts, const std::vector<size_t>& orde
   auto block_range = [&](int row, int a, int b) {
     const size_t base = static_cast<size_t>(row) * static_cast<size_t>(n);
     int* rem = runs_free.leaves(row);
+    count_free(row, a, b);
     std::fill(blocked.begin() + static_cast<std::ptrdiff_t>(base + static_cast<size_t>(a)),
               blocked.begin() + static_cast<std::ptrdiff_t>(base + static_cast<size_t>(b) + 1), uint8_t{1});
     const int after = b + 1 < n ? next_free[base + static_cast<size_t>(b) + 1] : n;
@@ -233,7 +271,7 @@ bool place_all(const std::vector<Chart>& charts, const std::vector<size_t>& orde
   };
   for (int row = 0; row < n; ++row) refresh_row(row);
   where.assign(charts.size(), Placement{});
-  touched = 0;
+  int bottom = margin;  // the first row below every placed chart
   for (size_t c : order) {
     // Each orientation's first fit in scan order (lowest row, then leftmost), the
     // orientations searched in parallel; the chosen one is the least (y, x, orientation),
@@ -245,10 +283,13 @@ bool place_all(const std::vector<Chart>& charts, const std::vector<size_t>& orde
     auto scan = [&](int r) {
       const Footprint& fp = prints[c][static_cast<size_t>(r)];
       const int bw = fp.bw, bh = fp.bh;
-      // Runs tested widest first: they are the likeliest to be blocked, and any blocked run
-      // gives a valid jump, so the order changes the work, not the fit found.
+      // Runs tested widest first: they are the likeliest to be blocked; a run found blocked at a
+      // candidate moves halfway to the front, as the next candidates tend to meet the same
+      // obstacle (5 % fewer instructions on irregular charts). Any blocked run gives a valid jump,
+      // so the order changes the work, not the fit found.
       std::vector<std::array<int, 3>> runs = fp.runs;
       std::stable_sort(runs.begin(), runs.end(), [](const auto& p, const auto& q) { return p[2] - p[1] > q[2] - q[1]; });
+      const std::array<int, 3> w0 = runs.front();
       // The footprint's widest run (row offset, length): rows without a free run that long
       // are skipped through the row maximum.
       int wide_row = 0, wide = 0;
@@ -261,29 +302,39 @@ bool place_all(const std::vector<Chart>& charts, const std::vector<size_t>& orde
           y = next - wide_row - 1;  // the loop's ++y lands on it
           continue;
         }
-        bool room = true;
-        for (const auto& run : runs) {
-          if (runs_free.longest(y + run[0]) < run[2] - run[1] + 1) {
-            room = false;
+        // Each run's row needs a free run at least as long; at the first that has none the scan
+        // moves on to the next row where that run would find one.
+        int skip = -1;
+        for (size_t i = 0; i < runs.size(); ++i) {
+          const auto run = runs[i];
+          const int length = run[2] - run[1] + 1;
+          if (longest_free.value(y + run[0]) < length) {  // the rows' maxima, contiguous in memory
+            skip = longest_free.first_at_least(y + run[0] + 1, length);
+            if (skip < 0) return;
+            skip -= run[0];
             break;
           }
         }
-        if (!room) continue;
+        if (skip >= 0) {
+          y = skip - 1;  // the loop's ++y lands on it
+          continue;
+        }
         int x = margin;
         while (x + bw <= n - margin) {
           // The widest run first, through its row's tree: the next column where it fits.
-          const auto& w0 = runs.front();
           const int c0 = runs_free.first_at_least(y + w0[0], x + w0[1], w0[2] - w0[1] + 1);
           if (c0 < 0) break;
           x = c0 - w0[1];
           if (x + bw > n - margin) break;
           int jump = -1;
-          for (const auto& run : runs) {
+          for (size_t i = 0; i < runs.size(); ++i) {
+            const auto run = runs[i];
             const int row = y + run[0];
             const int hit = x + run[1] + runs_free.rem(row, x + run[1]);  // the first blocked column from the run's start
             if (hit <= x + run[2]) {
               // The run must start past the blocked stretch that begins at `hit`.
               jump = next_free[static_cast<size_t>(row) * static_cast<size_t>(n) + static_cast<size_t>(hit)] - run[1];
+              std::swap(runs[i], runs[i / 2]);  // a blocked run moves halfway to the front (see above)
               break;
             }
           }
@@ -299,8 +350,21 @@ bool place_all(const std::vector<Chart>& charts, const std::vector<size_t>& orde
         }
       }
     };
+    // An orientation whose footprint is a lower one's (a rectangle's half turn) would find the
+    // same fit and lose the tie: it is not searched.
+    std::array<bool, 4> distinct{};
+    for (int r = 0; r < orientations; ++r) {
+      const Footprint& f = prints[c][static_cast<size_t>(r)];
+      distinct[static_cast<size_t>(r)] = true;
+      for (int q = 0; q < r; ++q) {
+        const Footprint& g = prints[c][static_cast<size_t>(q)];
+        if (f.bw == g.bw && f.bh == g.bh && f.runs == g.runs) distinct[static_cast<size_t>(r)] = false;
+      }
+    }
     if (orientations == 1) scan(0);
-    else tbb::parallel_for(0, orientations, scan);
+    else tbb::parallel_for(0, orientations, [&](int r) {
+        if (distinct[static_cast<size_t>(r)]) scan(r);
+      });
     bool found = false;
     Placement best;
     for (int r = 0; r < orientations; ++r) {
@@ -311,10 +375,15 @@ bool place_all(const std::vector<Chart>& charts, const std::vector<size_t>& orde
         found = true;
       }
     }
-    if (!found) return false;
+    if (!found) {
+      result.fill = static_cast<double>(need - remaining) / static_cast<double>(need);
+      return result;
+    }
     where[c] = best;
     const Footprint& placed = prints[c][static_cast<size_t>(best.orientation)];
     touched += placed.texels;
+    remaining -= least[c];
+    bottom = std::max(bottom, best.y + placed.bh);
     // The placed texels, as (x, y) in the atlas.
     std::vector<std::array<int, 2>> best_texels;
     best_texels.reserve(placed.texels);
@@ -355,16 +424,24 @@ bool place_all(const std::vector<Chart>& charts, const std::vector<size_t>& orde
         if (!any) continue;
         for (int y = cy * b; y < (cy + 1) * b; ++y) {
           for (int cx = 0; cx < cn; ++cx)
-            if (row[static_cast<size_t>(cx)])
+            if (row[static_cast<size_t>(cx)]) {
+              count_free(y, cx * b, cx * b + b - 1);
               std::fill_n(blocked.begin() + static_cast<std::ptrdiff_t>(static_cast<size_t>(y) * static_cast<size_t>(n) + static_cast<size_t>(cx * b)), b, uint8_t{1});
+            }
           row0 = std::min(row0, y);
           row1 = std::max(row1, y);
         }
       }
     }
     for (int row = row0; row <= row1; ++row) refresh_row(row);
+    if (remaining > free_inside) {
+      result.fill = static_cast<double>(need - remaining + free_inside) / static_cast<double>(need);
+      return result;
+    }
   }
-  return true;
+  result.ok = true;
+  result.fill = static_cast<double>(bottom - margin) / static_cast<double>(n - 2 * margin);
+  return result;
 }
 
 }  // namespace
@@ -442,53 +519,57 @@ UvPackReport pack_uv_charts(Mesh& mesh, const UvPackOptions& o) {
     orders.push_back(sorted_by([](const Chart& c) { return c.area * c.factor * c.factor; }));
   }
 
-  // The scale, per order: start where the charts' area would fill the atlas, halve until a
-  // packing succeeds, then bisect between the last failure and success to within the tolerance.
+  // The scale, per order. The charts' UV area would fill the atlas at s_area. Successes aim
+  // well and failures do not (below), so the search starts where most inputs pack: at 0.7 s_area
+  // the charts cover 49 % of the atlas (measured utilisations: 41-99 %; on seven benchmark
+  // inputs 0.7 took 34 packings in all, 0.5, 0.6 and 0.8 35-36). A success whose charts reach
+  // a share u of the rows aims the next attempt at 1 / sqrt(u) times its scale (as if the
+  // packing kept its density: close when u is well below 1). A failure says little about how
+  // far off it was (the last, smallest chart fails as often as a large one), so before a
+  // success the scale steps down 5 % (or to sqrt(f) times, at most a halving, when the charts
+  // placed held only a share f < 0.9 of the texels), a success before any failure steps up by
+  // at least the tolerance and at most a doubling, and once a success and a failure bracket the
+  // answer it is bisected. A success inside the bracket aims at its own estimate but kept in the middle half
+  // of the bracket (log scale), which so shrinks by at least a quarter; the search stops when
+  // the bracket is within the tolerance.
   const double n = o.size;
   double lo = 0;
-  std::vector<Placement> best;
-  size_t best_touched = 0;
+  Attempt best;
   for (const auto& order : orders) {
-    double hi = total_area > 0 ? std::sqrt(n * n / total_area) : n, ok = 0;
-    std::vector<Placement> where, found;
-    size_t touched = 0, found_touched = 0;
-    for (int k = 0; k < 40; ++k) {
+    double ok = 0, fail = 0, s = 0.7 * (total_area > 0 ? std::sqrt(n * n / total_area) : n);
+    Attempt found;
+    for (int k = 0; k < 60; ++k) {
       ++report.attempts;
-      if (place_all(charts, order, hi, o, orientations, where, touched)) {
-        ok = hi;
-        found = where;
-        found_touched = touched;
-        break;
-      }
-      hi *= 0.5;
-    }
-    if (found.empty() && count > 0) throw std::invalid_argument("the charts do not fit the atlas at any scale tried");
-    double fail = ok * 2;
-    // Bisect in [ok, fail): ok packs, fail did not (or was not tried beyond the start).
-    for (int k = 0; fail > 0 && fail / ok > tolerance && k < 60; ++k) {
-      const double mid = std::sqrt(ok * fail);
-      ++report.attempts;
-      if (place_all(charts, order, mid, o, orientations, where, touched)) {
-        ok = mid;
-        found = where;
-        found_touched = touched;
+      Attempt a = place_all(charts, order, s, o, orientations);
+      const double aim = a.ok ? s / std::sqrt(std::max(a.fill, 1e-9)) : s * std::clamp(std::sqrt(a.fill), 0.5, 0.95);
+      if (a.ok) {
+        ok = s;
+        found = std::move(a);
+        if (total_area == 0) break;  // no chart has UV area: any scale packs
       } else {
-        fail = mid;
+        fail = s;
+      }
+      if (ok > 0 && fail > 0) {
+        if (fail / ok <= tolerance) break;
+        const double quarter = std::pow(fail / ok, 0.25);
+        s = ok == s ? std::clamp(aim, ok * quarter, fail / quarter) : std::sqrt(ok * fail);
+      } else {
+        s = ok > 0 ? std::clamp(aim, s * tolerance, s * 2) : aim;
       }
     }
+    if (!found.ok && count > 0) throw std::invalid_argument("the charts do not fit the atlas at any scale tried");
     if (ok > lo) {
       lo = ok;
       best = std::move(found);
-      best_touched = found_touched;
     }
   }
   report.scale = lo;
-  report.texel_coverage = static_cast<double>(best_touched) / (n * n);
+  report.texel_coverage = static_cast<double>(best.touched) / (n * n);
   report.utilization = total_area * lo * lo / (n * n);
   // Move the UVs: q' = (turn(q) * s + offset) / size, v = 1 - q'y.
   for (size_t ci = 0; ci < count; ++ci) {
     const Chart& c = charts[ci];
-    const Placement& p = best[ci];
+    const Placement& p = best.where[ci];
     for (int f : c.faces)
       for (auto h : face_halfedges(mesh, FaceHandle(f))) {
         const Vec2f uv = mesh.texcoord2D(h);

@@ -4,6 +4,7 @@
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <cmath>
 #include <cstdio>
@@ -87,6 +88,55 @@ TEST(UvPack, SameUvsTwice) {
   pack_uv_charts(b, o);
   for (auto f : a.faces())
     for (auto h : face_halfedges(a, f)) ASSERT_EQ(a.texcoord2D(h), b.texcoord2D(h));
+}
+
+// The scale search starts near the area bound; inputs that pack only far below it (a long thin
+// chart, many charts whose padding outweighs their area) must still be found, and valid.
+TEST(UvPack, InputsThatPackFarBelowTheAreaBound) {
+  const std::vector<std::vector<std::array<float, 4>>> inputs = {
+      {{0, 0, 1.0f, 0.0005f}, {0, 0, 0.01f, 0.01f}},  // 2000:1 strip: fits at 1/45 of the area bound
+      std::vector<std::array<float, 4>>(900, {0, 0, 0.001f, 0.001f}),  // 900 tiny charts in 128^2 at padding 2
+  };
+  for (const auto& boxes : inputs) {
+    Mesh m = test::make_uv_quads(boxes);
+    UvPackOptions o;
+    o.size = 128;
+    o.padding = 2;
+    const UvPackReport r = pack_uv_charts(m, o);
+    UvCheckOptions check;
+    check.size = 128;
+    check.padding = 2;
+    check.overlay = false;
+    const UvCheckReport c = check_uv_mapping(m, check);
+    EXPECT_TRUE(c.shared_texel_faces.empty()) << boxes.size();
+    EXPECT_TRUE(c.padding_violations.empty()) << boxes.size();
+    EXPECT_TRUE(c.outside_faces.empty()) << boxes.size();
+    EXPECT_LE(r.attempts, 20) << boxes.size() << " charts";
+    std::printf("[ far below ] %zu charts: utilisation %.4f, %d attempts\n", boxes.size(), r.utilization, r.attempts);
+  }
+}
+
+// The orientations are searched in parallel and a failing packing stops early: the result
+// must not depend on either (the least (y, x, orientation) wins, whatever the timing).
+TEST(UvPack, SameResultOnOneThreadAndMany) {
+  for (const PackQuality q : {PackQuality::fast, PackQuality::balanced, PackQuality::best}) {
+    Mesh a = scattered_quads(150, 9), b = a;
+    UvPackOptions o;
+    o.size = 512;
+    o.quality = q;
+    UvPackReport ra;
+    {
+      tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+      ra = pack_uv_charts(a, o);
+    }
+    const UvPackReport rb = pack_uv_charts(b, o);
+    EXPECT_EQ(ra.scale, rb.scale);
+    EXPECT_EQ(ra.attempts, rb.attempts);
+    bool same = true;
+    for (auto f : a.faces())
+      for (auto h : face_halfedges(a, f)) same = same && a.texcoord2D(h) == b.texcoord2D(h);
+    EXPECT_TRUE(same) << static_cast<int>(q);
+  }
 }
 
 // --mip-safe K: the checker finds no texel of levels 0..K that mixes charts under bilinear
