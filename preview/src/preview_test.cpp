@@ -335,6 +335,34 @@ TEST(Preview, ConeAndPyramidTracersAgreeWithADenseReliefSearch) {
   }
 }
 
+// Sphere tracing is safe whatever the distance field's resolution: where the field allows no
+// step, the ray is intersected exactly with the filtered surface over the texel it is in and
+// walks on texel by texel, so with 2 slices (boxes far above the surface, a field that allows
+// few steps) as with 32 it finds the points of the cone tracer (exact, checked above).
+TEST(Preview, SphereTracingFindsTheConeTracersPointsWhateverTheSliceCount) {
+  const Mesh quad = test::make_grid(1, 1);
+  for (Border border : {Border::clamp, Border::wrap}) {
+    PreviewMaps maps = cone_maps(ConeScene::rough, border);
+    const HeightField field = make_height_field(maps.displacement, border);
+    for (int depth : {2, 32}) {
+      DistanceFieldOptions o;
+      o.depth = depth;
+      maps.sdf = distance_field_image(build_distance_field(field, o), field);
+      for (float angle : {30.0f, 65.0f}) {
+        const Image cone = render_headless(quad, maps, view_options("cone", angle, 35.0f, 256, PreviewShade::uv));
+        const Image traced = render_headless(quad, maps, view_options("sphere-tracing", angle, 35.0f, 2048, PreviewShade::uv));
+        // Clamped, the cone tracer starts where the ray comes over the map, while the distance
+        // field also holds the clamped surface beyond it: pixels whose traced point is on the map.
+        const Agreement a = agreement(traced, cone, 2, 0.01 / 64, border == Border::clamp ? &traced : nullptr);
+        std::printf("sphere-tracing, %d slices, %s, %.0f deg: %zu of %zu pixels agree with cone (%.4f)\n", depth, border_name(border),
+                    static_cast<double>(angle), a.within, a.pixels, a.fraction());
+        EXPECT_GT(a.pixels, 96u * 96u / 4);
+        EXPECT_GE(a.fraction(), 0.995) << depth << " slices, " << border_name(border) << " at " << angle;
+      }
+    }
+  }
+}
+
 // 4 x 4 matrices, column-major (OpenGL's layout), inverted in double.
 std::array<double, 16> inverse(const std::array<float, 16>& m) {
   std::array<double, 32> a{};  // [m | I], rows
