@@ -16,6 +16,15 @@
 namespace meso {
 namespace {
 
+// The checker's verdict on a packed mesh at the packing's size and padding (no overlay).
+UvCheckReport check_packed(const Mesh& m, int size, int padding) {
+  UvCheckOptions check;
+  check.size = size;
+  check.padding = padding;
+  check.overlay = false;
+  return check_uv_mapping(m, check);
+}
+
 // `count` separate quads in 3D, each its own chart, whose UVs all start at the origin (so
 // every chart overlaps every other before packing), sizes varying by a factor of 8.
 Mesh scattered_quads(int count, unsigned seed) {
@@ -43,11 +52,7 @@ TEST(UvPack, PacksWithoutOverlapAndWithPadding) {
     o.padding = padding;
     const UvPackReport r = pack_uv_charts(m, o);
     EXPECT_EQ(r.charts, static_cast<size_t>(count));
-    UvCheckOptions check;
-    check.size = size;
-    check.padding = padding;
-    check.overlay = false;
-    const UvCheckReport c = check_uv_mapping(m, check);
+    const UvCheckReport c = check_packed(m, size, padding);
     EXPECT_TRUE(c.overlapping_faces.empty()) << count;
     EXPECT_TRUE(c.shared_texel_faces.empty()) << count;
     EXPECT_TRUE(c.padding_violations.empty()) << count << " charts: " << c.padding_violations.size() << " pairs too close";
@@ -70,11 +75,7 @@ TEST(UvPack, SeamedCubeKeepsItsSixCharts) {
   o.padding = 2;
   const UvPackReport r = pack_uv_charts(cube, o);
   EXPECT_EQ(r.charts, 6u);
-  UvCheckOptions check;
-  check.size = 128;
-  check.padding = 2;
-  check.overlay = false;
-  const UvCheckReport c = check_uv_mapping(cube, check);
+  const UvCheckReport c = check_packed(cube, 128, 2);
   EXPECT_TRUE(c.shared_texel_faces.empty());
   EXPECT_TRUE(c.padding_violations.empty());
   EXPECT_EQ(c.charts, 6u);
@@ -103,11 +104,7 @@ TEST(UvPack, InputsThatPackFarBelowTheAreaBound) {
     o.size = 128;
     o.padding = 2;
     const UvPackReport r = pack_uv_charts(m, o);
-    UvCheckOptions check;
-    check.size = 128;
-    check.padding = 2;
-    check.overlay = false;
-    const UvCheckReport c = check_uv_mapping(m, check);
+    const UvCheckReport c = check_packed(m, 128, 2);
     EXPECT_TRUE(c.shared_texel_faces.empty()) << boxes.size();
     EXPECT_TRUE(c.padding_violations.empty()) << boxes.size();
     EXPECT_TRUE(c.outside_faces.empty()) << boxes.size();
@@ -187,11 +184,7 @@ TEST(UvPack, QualityPresetsAreValidAndOrdered) {
     o.padding = 2;
     o.quality = q;
     const UvPackReport r = pack_uv_charts(m, o);
-    UvCheckOptions check;
-    check.size = 512;
-    check.padding = 2;
-    check.overlay = false;
-    const UvCheckReport c = check_uv_mapping(m, check);
+    const UvCheckReport c = check_packed(m, 512, 2);
     EXPECT_TRUE(c.shared_texel_faces.empty());
     EXPECT_TRUE(c.padding_violations.empty());
     EXPECT_TRUE(c.outside_faces.empty());
