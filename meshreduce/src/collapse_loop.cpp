@@ -1,6 +1,7 @@
 #include "collapse_loop.hpp"
 
 #include "geometry.hpp"
+#include "halfedge_collapse.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -378,7 +379,7 @@ void CollapseLoop::apply(const Candidate& c) {
   pos_[i1] = c.q;
   faces_ -= static_cast<size_t>(c.fl.is_valid()) + static_cast<size_t>(c.fr.is_valid());
   const int collapsed = c.h.idx();
-  mesh_.collapse(c.h);
+  HalfedgeCollapser(mesh_).collapse(c.h);
   const VertexHandle w = c.v1;
   if (options_.has_uvs) {
     // Set every corner at w from the face it belongs to (collapse moves halfedges of the

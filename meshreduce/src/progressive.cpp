@@ -3,6 +3,7 @@
 #include "meso/core/error.hpp"
 
 #include "collapse_loop.hpp"
+#include "halfedge_collapse.hpp"
 
 #include <OpenMesh/Core/System/omstream.hh>
 
@@ -157,7 +158,7 @@ Mesh progressive_level(const ProgressiveMesh& pm, size_t target_faces, size_t* c
     faces -= static_cast<size_t>(mesh.face_handle(h).is_valid()) +
              static_cast<size_t>(mesh.face_handle(mesh.opposite_halfedge_handle(h)).is_valid());
     const VertexHandle w = mesh.to_vertex_handle(h);
-    mesh.collapse(h);
+    reduce::HalfedgeCollapser(mesh).collapse(h);
     mesh.set_point(w, c.position);
     if (!pm.has_uvs) continue;
     // The corners of w in the circulator order the reducer recorded them in.
