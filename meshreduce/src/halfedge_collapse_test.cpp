@@ -32,8 +32,9 @@ std::string structure(const Mesh& m) {
 
 // Collapses random legal halfedges (OpenMesh's is_collapse_ok) in two copies of `mesh`, one
 // with OpenMesh's collapse and one with HalfedgeCollapser, and compares the structures after
-// each: the same result, link for link, is what keeps reduce_mesh's outputs and progressive
-// records unchanged.
+// each, then compacts one with garbage_collection() and the other with compact(): the same
+// result, link for link, is what keeps reduce_mesh's outputs and progressive records
+// unchanged.
 void expect_same_collapses(const Mesh& mesh, uint32_t seed, int* made) {
   Mesh a = mesh, b = mesh;
   std::mt19937 rng(seed);
@@ -46,9 +47,17 @@ void expect_same_collapses(const Mesh& mesh, uint32_t seed, int* made) {
     ++*made;
     ASSERT_EQ(structure(a), structure(b)) << "after collapse " << *made << " (halfedge " << h.idx() << ")";
   }
+  // Compaction: the same elements in the same places, positions and UVs moved with them.
+  a.garbage_collection();
+  reduce::compact(b);
+  ASSERT_EQ(structure(a), structure(b)) << "after compaction";
+  for (auto v : a.vertices()) ASSERT_EQ(a.point(v), b.point(VertexHandle(v.idx())));
+  if (a.has_halfedge_texcoords2D()) {
+    for (auto h : a.halfedges()) ASSERT_EQ(a.texcoord2D(h), b.texcoord2D(HalfedgeHandle(h.idx())));
+  }
 }
 
-TEST(HalfedgeCollapse, SameStructureAsOpenMeshOnEveryCollapse) {
+TEST(HalfedgeCollapse, SameStructureAsOpenMeshOnEveryCollapseAndAfterCompaction) {
   // Open (boundary) and closed meshes; the torus and the wall reduce to their last legal
   // collapse, through the loops and boundary cases of small neighbourhoods.
   BrickWallOptions wall;

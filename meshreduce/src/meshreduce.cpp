@@ -2,6 +2,7 @@
 #include "meso/meshreduce/progressive.hpp"
 
 #include "collapse_loop.hpp"
+#include "halfedge_collapse.hpp"
 #include "modules.hpp"
 
 #include <algorithm>
@@ -80,7 +81,7 @@ Mesh reduce_mesh(const Mesh& input, const ReduceOptions& options, ReduceReport* 
     // reorders (OpenMesh swaps the last live element into each hole): capture after it.
     if (has_garbage(input)) {
       Mesh live = input;
-      live.garbage_collection();
+      reduce::compact(live);
       capture_input(live, *progressive);
     } else {
       capture_input(input, *progressive);
@@ -93,7 +94,7 @@ Mesh reduce_mesh(const Mesh& input, const ReduceOptions& options, ReduceReport* 
   // every handle even when nothing is deleted (and is a tenth of the reduction in Debian's
   // assertion-enabled build): only call it when there is garbage. Without deleted elements
   // its maps are the identity, so skipping it changes nothing.
-  if (has_garbage(mesh)) mesh.garbage_collection();
+  if (has_garbage(mesh)) compact(mesh);
   ReduceReport rep;
   rep.input_vertices = mesh.n_vertices();
   rep.input_faces = mesh.n_faces();
@@ -135,7 +136,7 @@ Mesh reduce_mesh(const Mesh& input, const ReduceOptions& options, ReduceReport* 
     rep.max_quadric_cost = loop.max_cost();
     for (const auto& m : loop.modules()) rep.rejected[m->name()] = m->rejected;
     loop.write_back();
-    mesh.garbage_collection();
+    compact(mesh);
   }
   if (progressive) progressive->final_faces = mesh.n_faces();
   clear_boundary_uvs(mesh);

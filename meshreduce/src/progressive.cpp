@@ -143,7 +143,7 @@ Mesh progressive_base_input(const ProgressiveMesh& pm) {
 Mesh progressive_level(const ProgressiveMesh& pm, size_t target_faces, size_t* collapses) {
   const std::string name = name_of(pm);
   Mesh mesh = progressive_base_input(pm);
-  mesh.garbage_collection();  // as reduce_mesh (nothing is deleted)
+  reduce::compact(mesh);  // as reduce_mesh (nothing is deleted)
   size_t faces = mesh.n_faces(), uv = 0, k = 0;
   for (; k < pm.collapses.size() && faces > target_faces; ++k) {
     const ProgressiveMesh::Collapse& c = pm.collapses[k];
@@ -170,7 +170,7 @@ Mesh progressive_level(const ProgressiveMesh& pm, size_t target_faces, size_t* c
   }
   if (k == pm.collapses.size() && (faces != pm.final_faces || uv != pm.uvs.size()))
     throw InputError(name, "the collapses do not end at the recorded face and UV counts");
-  mesh.garbage_collection();
+  reduce::compact(mesh);
   reduce::clear_boundary_uvs(mesh);
   compute_angle_weighted_normals(mesh);
   if (collapses) *collapses = k;
