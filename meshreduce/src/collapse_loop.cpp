@@ -455,7 +455,8 @@ size_t CollapseLoop::run(Progress& progress) {
       heap_.push_back(Slot{key_of(c0), e.idx()});
     }
   }
-  for (size_t i = heap_.size() / 2; i-- > 0;) sift_down(i);
+  for (size_t i = heap_.size() / kHeapArity + 1; i-- > 0;)
+    if (i < heap_.size()) sift_down(i);
 
   const size_t target = options_.target_faces;
   const uint64_t total = faces_ > target ? (faces_ - target) : 0;
@@ -523,7 +524,7 @@ void CollapseLoop::write_back() {
   }
 }
 
-// ---- indexed binary heap ----
+// ---- indexed 4-ary heap ----
 
 void CollapseLoop::heap_set(int edge, float key) {
   const int at = hpos_[ix(edge)];
@@ -557,7 +558,7 @@ void CollapseLoop::heap_remove(int edge) {
 void CollapseLoop::sift_up(size_t i) {
   const Slot s = heap_[i];
   while (i > 0) {
-    const size_t parent = (i - 1) / 2;
+    const size_t parent = (i - 1) / kHeapArity;
     if (!less(s, heap_[parent])) break;
     place(i, heap_[parent]);
     i = parent;
@@ -569,9 +570,12 @@ void CollapseLoop::sift_down(size_t i) {
   const Slot s = heap_[i];
   const size_t n = heap_.size();
   for (;;) {
-    size_t child = 2 * i + 1;
-    if (child >= n) break;
-    if (child + 1 < n && less(heap_[child + 1], heap_[child])) ++child;
+    const size_t first = kHeapArity * i + 1;
+    if (first >= n) break;
+    size_t child = first;
+    const size_t end = std::min(first + kHeapArity, n);
+    for (size_t k = first + 1; k < end; ++k)
+      if (less(heap_[k], heap_[child])) child = k;
     if (!less(heap_[child], s)) break;
     place(i, heap_[child]);
     i = child;

@@ -4,7 +4,7 @@
 // collapse, re-evaluates every outgoing halfedge of every vertex of the old one-ring with
 // every module (about 40 full legality and priority evaluations per collapse), and it
 // cannot move the kept vertex (ModQuadric places it on an endpoint). Here:
-//  - the heap holds edges (an indexed binary heap: key + edge per slot, one position per
+//  - the heap holds edges (an indexed 4-ary heap: key + edge per slot, one position per
 //    edge; no stale entries, no allocation after setup);
 //  - an edge's key is its quadric cost at its placement (cheap: a 10-double sum and two
 //    regularised 3x3 solves by cofactors, quadric.hpp); the legality tests (topology, then the modules) run only
@@ -162,7 +162,10 @@ class CollapseLoop {
   bool seam(Mesh::EdgeHandle e) const;
   Vec3f object_point(VertexHandle v) const;  // what write_back() gives v now
 
-  // Indexed binary heap on (key, edge).
+  // Indexed 4-ary heap on (key, edge): half the depth of a binary heap, and the four
+  // children of a slot share a cache line (8-byte slots). (key, edge) is a strict total
+  // order, so the pop order, and with it the reduction, does not depend on the heap's shape.
+  static constexpr size_t kHeapArity = 4;
   bool less(const Slot& a, const Slot& b) const { return a.key < b.key || (a.key == b.key && a.edge < b.edge); }
   void heap_set(int edge, float key);
   void heap_remove(int edge);
