@@ -51,7 +51,7 @@ CollapseLoop::CollapseLoop(Mesh& mesh, const LoopOptions& options) : mesh_(mesh)
   for (auto v : mesh_.vertices()) vdeg_[ix(v.idx())] = feature_degree(v);
 
   // Area-weighted plane quadrics, plus planes through feature edges perpendicular to their
-  // faces, weighted by boundary_weight times the edge's squared length.
+  // faces, weighted by boundary_weight (seams: seam_weight) times the edge's squared length.
   quadric_.assign(nv, Quadric());
   faces_ = 0;
   for (auto f : mesh_.faces()) {
@@ -76,7 +76,8 @@ CollapseLoop::CollapseLoop(Mesh& mesh, const LoopOptions& options) : mesh_(mesh)
       const double cl = cn.norm();
       if (!(cl > 0)) continue;
       cn /= cl;
-      const Quadric cq = Quadric::plane(cn, -OpenMesh::dot(cn, p), options_.boundary_weight * d.sqrnorm());
+      const double weight = mesh_.is_boundary(mesh_.edge_handle(h)) ? options_.boundary_weight : options_.seam_weight;
+      const Quadric cq = Quadric::plane(cn, -OpenMesh::dot(cn, p), weight * d.sqrnorm());
       quadric_[ix(from.idx())] += cq;
       quadric_[ix(to.idx())] += cq;
     }

@@ -97,7 +97,8 @@ class CollapseModule {
 struct LoopOptions {
   size_t target_faces = 0;
   bool has_uvs = false;
-  double boundary_weight = 100.0;
+  double boundary_weight = 100.0;  // ReduceOptions::boundary_weight
+  double seam_weight = 100.0;      // ReduceOptions::seam_weight
   // Lazy keys (ReduceQuality::fast): after a collapse, the edges around the kept vertex that
   // are queued keep their old keys instead of being re-evaluated. Every pop is re-evaluated
   // anyway (run()): a key that rose goes back into the heap, one that fell is collapsed at

@@ -107,6 +107,7 @@ Mesh reduce_mesh(const Mesh& input, const ReduceOptions& options, ReduceReport* 
     lo.target_faces = options.target_faces;
     lo.has_uvs = has_uvs(mesh);
     lo.boundary_weight = options.boundary_weight;
+    lo.seam_weight = options.seam_weight;
     lo.lazy = options.quality == ReduceQuality::fast;
     CollapseLoop loop(mesh, lo);
     if (progressive) loop.record(progressive);
@@ -120,7 +121,8 @@ Mesh reduce_mesh(const Mesh& input, const ReduceOptions& options, ReduceReport* 
     if (!options.lock_groups.empty()) lock("lock_group", group_vertices(mesh, options.lock_groups));
     rep.locked_vertices = static_cast<size_t>(std::count(pinned.begin(), pinned.end(), uint8_t{1}));
     const double diagonal = static_cast<double>(bounding_box(mesh).diagonal()) * loop.scale();
-    loop.add(std::make_unique<ChartGuard>(loop, options.boundary_tolerance * diagonal, options.uv_tolerance));
+    loop.add(std::make_unique<ChartGuard>(loop, options.boundary_tolerance * diagonal, options.seam_tolerance * diagonal,
+                                          options.uv_tolerance));
     if (lo.has_uvs) loop.add(std::make_unique<UvFoldGuard>());
     loop.add(std::make_unique<NoFlip>());
     if (options.max_normal_deviation < 180.0f) loop.add(std::make_unique<NormalDeviation>(options.max_normal_deviation));

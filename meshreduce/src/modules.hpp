@@ -50,8 +50,9 @@ class VertexLock final : public CollapseModule {
 // a vertex in one triangle: the collapse would glue a chart's edge to another chart).
 class ChartGuard final : public CollapseModule {
  public:
-  ChartGuard(const CollapseLoop& loop, double position_tolerance, double uv_tolerance)
-      : loop_(loop), pos_tol_(position_tolerance), uv_tol_(uv_tolerance) {}
+  // Tolerances in normalised units for boundaries and for seams (ReduceOptions), and in UV units.
+  ChartGuard(const CollapseLoop& loop, double boundary_tolerance, double seam_tolerance, double uv_tolerance)
+      : loop_(loop), boundary_tol_(boundary_tolerance), seam_tol_(seam_tolerance), uv_tol_(uv_tolerance) {}
   const char* name() const override { return "chart_guard"; }
 
   bool allow(const Candidate& c) override {
@@ -64,8 +65,9 @@ class ChartGuard final : public CollapseModule {
     if (c.other0 == vl || c.other0 == vr || c.other0 == c.v1) return false;
     const bool v1_moves = c.t < 1 && c.other1.is_valid();
     if (c.other1.is_valid() && (c.other1 == vl || c.other1 == vr || c.other1 == c.other0 || c.other1 == c.v0)) return false;
-    if (point_segment_distance(c.p0, loop_.pos(c.other0), c.q) > pos_tol_) return false;
-    if (v1_moves && point_segment_distance(c.p1, c.q, loop_.pos(c.other1)) > pos_tol_) return false;
+    const double pos_tol = m.is_boundary(c.e) ? boundary_tol_ : seam_tol_;
+    if (point_segment_distance(c.p0, loop_.pos(c.other0), c.q) > pos_tol) return false;
+    if (v1_moves && point_segment_distance(c.p1, c.q, loop_.pos(c.other1)) > pos_tol) return false;
     if (!m.has_halfedge_texcoords2D()) return true;
     for (int s = 0; s < 2; ++s) {
       if (!c.side_valid[s]) continue;
@@ -78,7 +80,7 @@ class ChartGuard final : public CollapseModule {
 
  private:
   const CollapseLoop& loop_;
-  double pos_tol_, uv_tol_;
+  double boundary_tol_, seam_tol_, uv_tol_;
 };
 
 // No UV triangle flips or becomes degenerate (one already degenerate cannot get worse).
