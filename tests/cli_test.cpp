@@ -25,9 +25,10 @@ struct Result {
   std::string out, err;
 };
 
-Result run(const std::string& args) {
+// Runs meso with `args`; `env` ("NAME=value ", may be empty) goes before the command.
+Result run_env(const std::string& env, const std::string& args) {
   test::TempDir tmp;
-  const std::string cmd = std::string(MESO_EXE) + " " + args + " 2>" + (tmp / "stderr").string();
+  const std::string cmd = env + std::string(MESO_EXE) + " " + args + " 2>" + (tmp / "stderr").string();
   Result r;
   FILE* p = ::popen(cmd.c_str(), "r");
   if (!p) return r;
@@ -39,6 +40,8 @@ Result run(const std::string& args) {
   r.err = test::read_text(tmp / "stderr");
   return r;
 }
+
+Result run(const std::string& args) { return run_env("", args); }
 
 void example(const std::string& args) {
   const std::string cmd = std::string(MESO_EXAMPLE_EXE) + " " + args;
@@ -199,6 +202,24 @@ TEST(Cli, BadInputExitsThreeWithOneLineNamingTheFileAndNoOutput) {
     EXPECT_FALSE(fs::exists(dir / "o.png"));
     EXPECT_TRUE(!fs::exists(dir / "maps") || fs::is_empty(dir / "maps")) << "no partial bake output";
   }
+}
+
+// OpenImageIO lives in a module opened on the first image read or write
+// (formats/src/image_io_backend.hpp): a command that touches no image never opens it, and
+// one that does but cannot open it fails with exit 4 and one line naming the module.
+TEST(Cli, ImageModuleIsOpenedOnlyWhenAnImageIsRead) {
+  test::TempDir dir;
+  example("--columns 8 --rows 4 -o " + (dir / "wall.obj").string());
+  const std::string no_module = "MESO_IMAGE_MODULE=" + (dir / "missing.so").string() + " ";
+  const Result reduce = run_env(no_module, "meshreduce " + (dir / "wall.obj").string() + " -o " + (dir / "low.obj").string() + " --faces 20");
+  EXPECT_EQ(reduce.code, 0) << reduce.err;
+  EXPECT_TRUE(fs::exists(dir / "low.obj"));
+  test::write_text(dir / "h.exr", "");
+  const Result cone = run_env(no_module, "streams cone " + (dir / "h.exr").string() + " -o " + (dir / "cone.exr").string());
+  EXPECT_EQ(cone.code, 4) << cone.err;
+  EXPECT_EQ(lines(cone.err), 1u) << cone.err;
+  EXPECT_NE(cone.err.find("missing.so"), std::string::npos) << cone.err;
+  EXPECT_FALSE(fs::exists(dir / "cone.exr"));
 }
 
 TEST(Cli, UvCheckFailsOnRequestOnly) {

@@ -1,0 +1,239 @@
+// The image functions of image_io.hpp on OpenImageIO, built as a loadable module (see
+// image_io_backend.hpp for why): the public functions in image_io.cpp forward here.
+#include "image_io_backend.hpp"
+
+#include "meso/core/error.hpp"
+
+#include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdint>
+#include <memory>
+
+namespace meso {
+
+namespace fs = std::filesystem;
+
+// Everything here is internal to the module: it is reached only through the table below.
+namespace {
+constexpr const char* kPrefix = "meso:";
+
+template <typename T>
+std::vector<T> quantize(const LargeVector<float>& px, float max_value) {
+  std::vector<T> out(px.size());
+  for (size_t i = 0; i < px.size(); ++i) {
+    const float v = std::clamp(px[i], 0.0f, 1.0f);
+    out[i] = static_cast<T>(std::lround(v * max_value));
+  }
+  return out;
+}
+
+
+std::unique_ptr<OIIO::ImageInput> open_input(const fs::path& path) {
+  const std::string name = path.string();
+  if (!fs::exists(path)) throw InputError(name, "no such file");
+  // meso's images carry straight (unassociated) alpha, as PNG stores it: ask OIIO not to
+  // premultiply on read (and not to divide on write), which would also lose precision.
+  OIIO::ImageSpec config;
+  config.attribute("oiio:UnassociatedAlpha", 1);
+  auto in = OIIO::ImageInput::open(name, &config);
+  if (!in) {
+    std::string err = OIIO::geterror();
+    if (err.empty()) err = "not an image file OpenImageIO can read";
+    // OIIO messages can span lines; keep the first.
+    throw InputError(name, "cannot read image: " + err.substr(0, err.find('\n')));
+  }
+  return in;
+}
+
+// Reads the MIP level the input is positioned at (its current spec).
+Image read_level(OIIO::ImageInput& in, const std::string& name, int level, int subimage = 0) {
+  const OIIO::ImageSpec& spec = in.spec();
+  if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0 || spec.depth > 1)
+    throw InputError(name, "unsupported image layout");
+  Image img(spec.width, spec.height, spec.nchannels);
+  if (!in.read_image(subimage, level, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, img.pixels.data())) {
+    const std::string err = in.geterror();
+    throw InputError(name, "cannot read image data: " + err.substr(0, err.find('\n')));
+  }
+  for (const auto& p : spec.extra_attribs) {
+    const std::string key = p.name().string();
+    if (key.rfind(kPrefix, 0) != 0) continue;
+    const std::string k = key.substr(std::char_traits<char>::length(kPrefix));
+    if (p.type() == OIIO::TypeDesc::FLOAT) img.metadata[k] = p.get_float();
+    else if (p.type() == OIIO::TypeDesc::INT) img.metadata[k] = p.get_int();
+    else img.metadata[k] = p.get_string();
+  }
+  for (size_t i = 0; i < img.pixels.size(); ++i) {
+    if (std::isfinite(img.pixels[i])) continue;
+    const size_t texel = i / static_cast<size_t>(img.channels);
+    throw InputError(name, std::string(std::isnan(img.pixels[i]) ? "NaN" : "infinite") + " sample at texel (" +
+                               std::to_string(texel % static_cast<size_t>(img.width)) + ", " +
+                               std::to_string(texel / static_cast<size_t>(img.width)) + ") channel " +
+                               std::to_string(i % static_cast<size_t>(img.channels)) +
+                               (level ? " of MIP level " + std::to_string(level) : std::string()));
+  }
+  return img;
+}
+
+
+Image read_image(const fs::path& path) {
+  auto in = open_input(path);
+  return read_level(*in, path.string(), 0);
+}
+
+
+OIIO::TypeDesc type_of(PixelFormat format) {
+  switch (format) {
+    case PixelFormat::half: return OIIO::TypeDesc::HALF;
+    case PixelFormat::uint8: return OIIO::TypeDesc::UINT8;
+    case PixelFormat::uint16: return OIIO::TypeDesc::UINT16;
+    case PixelFormat::float32: break;
+  }
+  return OIIO::TypeDesc::FLOAT;
+}
+
+void check_writable(const Image& image, const std::string& name) {
+  if (image.empty()) throw InternalError(name + ": refusing to write an empty image");
+  for (float v : image.pixels) {
+    if (std::isnan(v)) throw InternalError(name + ": image has NaN samples (a bug in meso)");
+  }
+}
+
+OIIO::ImageSpec spec_of(const Image& image, PixelFormat format, const ImageMetadata& metadata, bool text_only = false) {
+  OIIO::ImageSpec spec(image.width, image.height, image.channels, type_of(format));
+  // Beyond RGBA, name channels so that their sorted order (EXR stores channels sorted by
+  // name) is their index order: c000, c001, ...
+  if (image.channels > 4) {
+    spec.channelnames.clear();
+    char name[16];
+    for (int c = 0; c < image.channels; ++c) {
+      std::snprintf(name, sizeof name, "c%03d", c);
+      spec.channelnames.emplace_back(name);
+    }
+  }
+  spec.attribute("oiio:UnassociatedAlpha", 1);
+  if (format == PixelFormat::float32 || format == PixelFormat::half) spec.attribute("compression", "zip");
+  // No timestamps in headers: outputs must be byte-identical across runs. OIIO's EXR writer
+  // stamps the current time into capDate unless DateTime is given; an empty one writes none.
+  spec.attribute("DateTime", "");
+  for (const auto& [k, v] : metadata) {
+    const std::string key = std::string(kPrefix) + k;
+    if (text_only) {
+      // PNG keeps text chunks only: numbers as text, floats round-trippable ("%.9g").
+      char buffer[32];
+      if (const int* i = std::get_if<int>(&v)) spec.attribute(key, std::to_string(*i));
+      else if (const float* f = std::get_if<float>(&v)) {
+        std::snprintf(buffer, sizeof buffer, "%.9g", static_cast<double>(*f));
+        spec.attribute(key, std::string(buffer));
+      } else spec.attribute(key, std::get<std::string>(v));
+    } else if (const int* i = std::get_if<int>(&v)) spec.attribute(key, *i);
+    else if (const float* f = std::get_if<float>(&v)) spec.attribute(key, *f);
+    else spec.attribute(key, std::get<std::string>(v));
+  }
+  return spec;
+}
+
+bool write_pixels(OIIO::ImageOutput& out, const Image& image, PixelFormat format) {
+  if (format == PixelFormat::uint8) {
+    auto q = quantize<uint8_t>(image.pixels, 255.0f);
+    return out.write_image(OIIO::TypeDesc::UINT8, q.data());
+  }
+  if (format == PixelFormat::uint16) {
+    auto q = quantize<uint16_t>(image.pixels, 65535.0f);
+    return out.write_image(OIIO::TypeDesc::UINT16, q.data());
+  }
+  return out.write_image(OIIO::TypeDesc::FLOAT, image.pixels.data());
+}
+
+void write_image(const Image& image, const fs::path& path, PixelFormat format) {
+  const std::string name = path.string();
+  check_writable(image, name);
+  auto out = OIIO::ImageOutput::create(name);
+  if (!out) throw InternalError(name + ": no image writer for this extension");
+  std::string extension = path.extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  const OIIO::ImageSpec spec = spec_of(image, format, image.metadata, extension == ".png");
+  if (!out->open(name, spec)) throw InternalError(name + ": cannot open for writing: " + out->geterror());
+  if (!write_pixels(*out, image, format) || !out->close()) throw InternalError(name + ": cannot write image: " + out->geterror());
+}
+
+void write_image_levels(const std::vector<Image>& levels, const fs::path& path, PixelFormat format) {
+  const std::string name = path.string();
+  if (levels.empty()) throw InternalError(name + ": no levels to write");
+  for (size_t k = 0; k < levels.size(); ++k) {
+    check_writable(levels[k], name);
+    if (levels[k].channels != levels[0].channels) throw InternalError(name + ": levels differ in channel count");
+    if (k > 0 && (levels[k].width != std::max(1, levels[k - 1].width / 2) || levels[k].height != std::max(1, levels[k - 1].height / 2)))
+      throw InternalError(name + ": level sizes do not halve (rounding down) from one level to the next");
+  }
+  if (format != PixelFormat::float32 && format != PixelFormat::half) throw InternalError(name + ": MIP levels are written as EXR only");
+  auto out = OIIO::ImageOutput::create(name);
+  if (!out || !out->supports("mipmap")) throw InternalError(name + ": this format cannot hold MIP levels (use .exr)");
+  for (size_t k = 0; k < levels.size(); ++k) {
+    OIIO::ImageSpec spec = spec_of(levels[k], format, k == 0 ? levels[0].metadata : ImageMetadata{});
+    // A tiled, MIP-mapped EXR (OpenEXR's MIPMAP_LEVELS, rounding down).
+    spec.tile_width = spec.tile_height = 64;
+    spec.attribute("openexr:levelmode", 1);
+    spec.attribute("textureformat", "Plain Texture");
+    const auto mode = k == 0 ? OIIO::ImageOutput::Create : OIIO::ImageOutput::AppendMIPLevel;
+    if (!out->open(name, spec, mode)) throw InternalError(name + ": cannot open for writing: " + out->geterror());
+    if (!write_pixels(*out, levels[k], format)) throw InternalError(name + ": cannot write level " + std::to_string(k) + ": " + out->geterror());
+  }
+  if (!out->close()) throw InternalError(name + ": cannot write image: " + out->geterror());
+}
+
+std::vector<Image> read_image_levels(const fs::path& path) {
+  auto in = open_input(path);
+  std::vector<Image> levels{read_level(*in, path.string(), 0)};
+  for (int k = 1; in->seek_subimage(0, k); ++k) levels.push_back(read_level(*in, path.string(), k));
+  return levels;
+}
+
+void write_image_parts(const std::vector<Image>& parts, const fs::path& path, PixelFormat format) {
+  const std::string name = path.string();
+  for (const Image& part : parts) check_writable(part, name);
+  if (format != PixelFormat::float32 && format != PixelFormat::half) throw InternalError(name + ": parts are written as EXR only");
+  auto out = OIIO::ImageOutput::create(name);
+  if (!out || !out->supports("multiimage")) throw InternalError(name + ": this format cannot hold several parts (use .exr)");
+  std::vector<OIIO::ImageSpec> specs;
+  // OpenEXR requires every part to share the display window: the largest part's extent.
+  int full_w = 0, full_h = 0;
+  for (const Image& part : parts) {
+    full_w = std::max(full_w, part.width);
+    full_h = std::max(full_h, part.height);
+  }
+  for (const Image& part : parts) {
+    specs.push_back(spec_of(part, format, part.metadata));
+    specs.back().full_x = specs.back().full_y = 0;
+    specs.back().full_width = full_w;
+    specs.back().full_height = full_h;
+  }
+  if (!out->open(name, static_cast<int>(specs.size()), specs.data())) throw InternalError(name + ": cannot open for writing: " + out->geterror());
+  for (size_t k = 0; k < parts.size(); ++k) {
+    if (k > 0 && !out->open(name, specs[k], OIIO::ImageOutput::AppendSubimage))
+      throw InternalError(name + ": cannot add part " + std::to_string(k) + ": " + out->geterror());
+    if (!write_pixels(*out, parts[k], format)) throw InternalError(name + ": cannot write part " + std::to_string(k) + ": " + out->geterror());
+  }
+  if (!out->close()) throw InternalError(name + ": cannot write image: " + out->geterror());
+}
+
+std::vector<Image> read_image_parts(const fs::path& path) {
+  auto in = open_input(path);
+  std::vector<Image> parts{read_level(*in, path.string(), 0, 0)};
+  for (int k = 1; in->seek_subimage(k, 0); ++k) parts.push_back(read_level(*in, path.string(), 0, k));
+  return parts;
+}
+
+// The table of the functions above (the public names of image_io.hpp are declared too, but
+// only in the program that opens this module).
+const ImageIoBackend kBackend = {read_image,        write_image,       write_image_levels,
+                                 read_image_levels, write_image_parts, read_image_parts};
+
+}  // namespace
+
+}  // namespace meso
+
+extern "C" MESO_IMAGE_BACKEND_EXPORT const meso::ImageIoBackend* meso_image_io_backend_v1() { return &meso::kBackend; }
