@@ -54,6 +54,19 @@ CollapseLoop::CollapseLoop(Mesh& mesh, const LoopOptions& options) : mesh_(mesh)
   // faces, weighted by boundary_weight (seams: seam_weight) times the edge's squared length.
   quadric_.assign(nv, Quadric());
   faces_ = 0;
+  double mean_area = 0;  // uniform_planes: every face plane gets this weight
+  if (options_.uniform_planes) {
+    size_t n = 0;
+    for (auto f : mesh_.faces()) {
+      const auto hs = face_halfedges(mesh_, f);
+      const Vec3d& a = pos_[ix(mesh_.to_vertex_handle(hs[0]).idx())];
+      const Vec3d& b = pos_[ix(mesh_.to_vertex_handle(hs[1]).idx())];
+      const Vec3d& c = pos_[ix(mesh_.to_vertex_handle(hs[2]).idx())];
+      mean_area += 0.5 * OpenMesh::cross(b - a, c - a).norm();
+      ++n;
+    }
+    mean_area /= static_cast<double>(std::max<size_t>(1, n));
+  }
   for (auto f : mesh_.faces()) {
     ++faces_;
     const auto hs = face_halfedges(mesh_, f);
@@ -65,7 +78,7 @@ CollapseLoop::CollapseLoop(Mesh& mesh, const LoopOptions& options) : mesh_(mesh)
     const double len = n.norm();
     if (!(len > 0)) continue;
     n /= len;
-    const Quadric q = Quadric::plane(n, -OpenMesh::dot(n, a), 0.5 * len);
+    const Quadric q = Quadric::plane(n, -OpenMesh::dot(n, a), options_.uniform_planes ? mean_area : 0.5 * len);
     for (auto vh : v) quadric_[ix(vh.idx())] += q;
     for (auto h : hs) {
       if (!efeat_[ix(mesh_.edge_handle(h).idx())]) continue;

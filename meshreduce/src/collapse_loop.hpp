@@ -108,6 +108,8 @@ struct LoopOptions {
   // seven of the eleven per collapse), of which the re-pops give some back (on the bricks
   // 13 % fewer instructions in all), at the price of edges whose key fell waiting their turn.
   bool lazy = false;
+  // Face planes weighted by the mean face area instead of each face's own area (ReduceQuality::best).
+  bool uniform_planes = false;
 };
 
 class CollapseLoop {

@@ -1,5 +1,6 @@
 #include "meso/meshreduce/meshreduce.hpp"
 #include "meso/meshreduce/progressive.hpp"
+#include "meso/meshreduce/surface_distance.hpp"
 
 #include "collapse_loop.hpp"
 #include "halfedge_collapse.hpp"
@@ -69,10 +70,9 @@ std::vector<uint8_t> group_vertices(const Mesh& mesh, const std::vector<std::str
   return locked;
 }
 
-}  // namespace
-
-Mesh reduce_mesh(const Mesh& input, const ReduceOptions& options, ReduceReport* report, Progress& progress,
-                 ProgressiveMesh* progressive) {
+// One reduction with the given face-plane weighting (LoopOptions::uniform_planes).
+Mesh reduce_once(const Mesh& input, const ReduceOptions& options, bool uniform_planes, ReduceReport* report,
+                 Progress& progress, ProgressiveMesh* progressive) {
   using namespace reduce;
   const auto t0 = std::chrono::steady_clock::now();
   Mesh mesh;
@@ -109,6 +109,7 @@ Mesh reduce_mesh(const Mesh& input, const ReduceOptions& options, ReduceReport* 
     lo.boundary_weight = options.boundary_weight;
     lo.seam_weight = options.seam_weight;
     lo.lazy = options.quality == ReduceQuality::fast;
+    lo.uniform_planes = uniform_planes;
     CollapseLoop loop(mesh, lo);
     if (progressive) loop.record(progressive);
     // Locks first: the cheapest test, and the one that explains a target out of reach.
@@ -153,6 +154,31 @@ Mesh reduce_mesh(const Mesh& input, const ReduceOptions& options, ReduceReport* 
   rep.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (report) *report = rep;
   return mesh;
+}
+
+}  // namespace
+
+Mesh reduce_mesh(const Mesh& input, const ReduceOptions& options, ReduceReport* report, Progress& progress,
+                 ProgressiveMesh* progressive) {
+  if (options.quality != ReduceQuality::best) return reduce_once(input, options, false, report, progress, progressive);
+  // best: both weightings, then the output nearer the input by the measure meso reports.
+  const auto t0 = std::chrono::steady_clock::now();
+  ReduceReport reports[2];
+  ProgressiveMesh records[2];
+  Mesh outputs[2];
+  double hausdorff[2] = {0, 0};
+  for (int k = 0; k < 2; ++k) {
+    outputs[k] = reduce_once(input, options, k == 1, &reports[k], progress, progressive ? &records[k] : nullptr);
+    hausdorff[k] = measure_surface_distance(input, outputs[k]).hausdorff;
+  }
+  const int pick = hausdorff[1] < hausdorff[0] ? 1 : 0;
+  ReduceReport rep = reports[pick];
+  rep.planes = pick == 1 ? "uniform" : "area";
+  rep.candidate_hausdorff = {hausdorff[0], hausdorff[1]};
+  rep.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (report) *report = rep;
+  if (progressive) *progressive = std::move(records[pick]);
+  return std::move(outputs[pick]);
 }
 
 }  // namespace meso

@@ -30,8 +30,13 @@ struct ProgressiveMesh;  // progressive.hpp
 //    on the bench meshes); the order is no longer exactly cheapest-first, which there gave
 //    Hausdorff distances within 0.2 % of or below balanced's and RMS within 12 % of it
 //    (docs/benchmarks.md).
-//  - best: today the same as balanced (bit-identical output): the variants tried so far did
-//    not lower the measured error on the bench meshes (docs/benchmarks.md).
+//  - best: balanced twice, once with each face plane weighted by its area (the other
+//    presets) and once by the mean face area (Garland and Heckbert's unweighted quadrics,
+//    scaled so that seam and boundary planes keep their balance), then the output with the
+//    lower two-sided Hausdorff distance to the input (measure_surface_distance; area wins
+//    ties). Neither weighting is better at every budget on the bench meshes (docs/
+//    benchmarks.md); best costs two reductions and two measurements. With `progressive`,
+//    the record is the chosen run's: its levels equal that weighting's balanced reduction.
 enum class ReduceQuality { fast, balanced, best };
 
 struct ReduceOptions {
@@ -102,6 +107,10 @@ struct ReduceReport {
   // tracked on, in object units (-1 when not tracked).
   double tracked_error = -1;
   size_t locked_vertices = 0;  // vertices pinned by lock_boundary and lock_groups
+  // With ReduceQuality::best: the face-plane weighting chosen ("area" or "uniform") and the
+  // measured Hausdorff distance of each candidate (area, uniform), object units.
+  std::string planes = "area";
+  std::vector<double> candidate_hausdorff;
 };
 
 // Returns the reduced mesh. Guarantees:
