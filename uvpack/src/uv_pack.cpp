@@ -80,7 +80,10 @@ Frame min_area_frame(const Chart& c) {
   std::vector<std::array<double, 2>> p;
   p.reserve(3 * c.tris.size());
   for (const auto& t : c.tris)
-    for (size_t k = 0; k < 3; ++k) p.push_back({t[2 * k], t[2 * k + 1]});
+    for (size_t k = 0; k < 3; ++k) {
+      if (!std::isfinite(t[2 * k]) || !std::isfinite(t[2 * k + 1])) return c.frames[0];  // no order to sort by
+      p.push_back({t[2 * k], t[2 * k + 1]});
+    }
   std::sort(p.begin(), p.end());
   p.erase(std::unique(p.begin(), p.end()), p.end());
   if (p.size() < 3) return c.frames[0];

@@ -143,24 +143,27 @@ TEST(UvPack, InputsThatPackFarBelowTheAreaBound) {
 // The orientations are searched in parallel and a failing packing stops early: the result
 // must not depend on either (the least (y, x, orientation) wins, whatever the timing).
 TEST(UvPack, SameResultOnOneThreadAndMany) {
-  for (const PackQuality q : {PackQuality::fast, PackQuality::balanced, PackQuality::best}) {
-    Mesh a = scattered_quads(150, 9), b = a;
-    UvPackOptions o;
-    o.size = 512;
-    o.quality = q;
-    UvPackReport ra;
-    {
-      tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
-      ra = pack_uv_charts(a, o);
+  // Axis-aligned charts (four orientations each), and turned ones (up to eight: quarter turns of
+  // the input's and the minimum-area orientation), where the variants above the scale run too.
+  for (const Mesh& input : {scattered_quads(150, 9), turned_quads(40, 9)})
+    for (const PackQuality q : {PackQuality::fast, PackQuality::balanced, PackQuality::best}) {
+      Mesh a = input, b = input;
+      UvPackOptions o;
+      o.size = 512;
+      o.quality = q;
+      UvPackReport ra;
+      {
+        tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+        ra = pack_uv_charts(a, o);
+      }
+      const UvPackReport rb = pack_uv_charts(b, o);
+      EXPECT_EQ(ra.scale, rb.scale);
+      EXPECT_EQ(ra.attempts, rb.attempts);
+      bool same = true;
+      for (auto f : a.faces())
+        for (auto h : face_halfedges(a, f)) same = same && a.texcoord2D(h) == b.texcoord2D(h);
+      EXPECT_TRUE(same) << input.n_faces() / 2 << " charts, quality " << static_cast<int>(q);
     }
-    const UvPackReport rb = pack_uv_charts(b, o);
-    EXPECT_EQ(ra.scale, rb.scale);
-    EXPECT_EQ(ra.attempts, rb.attempts);
-    bool same = true;
-    for (auto f : a.faces())
-      for (auto h : face_halfedges(a, f)) same = same && a.texcoord2D(h) == b.texcoord2D(h);
-    EXPECT_TRUE(same) << static_cast<int>(q);
-  }
 }
 
 // --mip-safe K: the checker finds no texel of levels 0..K that mixes charts under bilinear
