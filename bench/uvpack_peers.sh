@@ -13,13 +13,15 @@
 # bricks_split (bricks_base cut into 150 irregular charts). See bench/uvpack_peers/gen_charts.mjs.
 #
 # xatlas variants (P = the padding asked for):
-#   "P, bilinear, random"          PackOptions padding P, bilinear on, random placement: xatlas's
-#                                  defaults (except rotateChartsToAxis, off: 90-degree turns only,
-#                                  as meso) - the main comparison
+#   "P, bilinear, random, axis"    PackOptions padding P, bilinear on, random placement,
+#                                  rotateChartsToAxis on: xatlas's defaults - the main comparison
+#                                  (meso also turns charts to their minimum-area orientation)
+#   "P, bilinear, random"          the same with rotateChartsToAxis off: 90-degree turns only
 #   "P, bilinear, brute force"     the same with bruteForce (xatlas's best-placement mode)
-#   "P/2, no bilinear, random"     padding ceil(P/2), bilinear off: what meso's checker asks for,
+#   "P/2, no bilinear, random, axis" padding ceil(P/2), bilinear off: what meso's checker asks for,
 #                                  since xatlas dilates every chart by its padding (so two charts
 #                                  end up about 2 P apart) while meso's P is the gap between charts
+#   "P/2, no bilinear, random"     the same with rotateChartsToAxis off
 #   "P/2, no bilinear, brute force"
 # xatlas packs at a given scale, so xatlas_pack.mjs searches the largest scale at which all
 # charts fit one atlas (1 % steps down from the area bound, then refined to 0.1 %; see there).
@@ -103,9 +105,9 @@ for input in $INPUTS; do
       done
       # xatlas variants
       half=$(( (pad + 1) / 2 ))
-      variants=("P, bilinear, random|--padding $pad --bilinear 1")
+      variants=("P, bilinear, random, axis|--padding $pad --bilinear 1 --axis" "P, bilinear, random|--padding $pad --bilinear 1")
       [[ $XATLAS_BRUTE == 1 ]] && variants+=("P, bilinear, brute force|--padding $pad --bilinear 1 --brute-force")
-      variants+=("P/2, no bilinear, random|--padding $half --bilinear 0")
+      variants+=("P/2, no bilinear, random, axis|--padding $half --bilinear 0 --axis" "P/2, no bilinear, random|--padding $half --bilinear 0")
       [[ $XATLAS_BRUTE == 1 ]] && variants+=("P/2, no bilinear, brute force|--padding $half --bilinear 0 --brute-force")
       i=0
       for v in "${variants[@]}"; do

@@ -73,8 +73,13 @@ TEST(Cli, UvpackPackMakesAUniqueMappingWithPadding) {
   const auto report = nlohmann::json::parse(r.out);
   EXPECT_EQ(report["charts"], 6);
   EXPECT_GT(report["utilization"].get<double>(), 0.3);
+  EXPECT_EQ(report["min_area_orientation"], true);
   const Result check = run("uvpack check " + (dir / "packed.obj").string() + " --size 128 --padding 3 --fail-on overlap,shared,padding,outside");
   EXPECT_EQ(check.code, 0) << check.err;
+  // --quarter-turns: only quarter turns of the input's orientation, as the report says.
+  const Result quarter = run("uvpack pack " + (dir / "cube.obj").string() + " -o " + (dir / "quarter.obj").string() + " --size 128 --padding 3 --quarter-turns --json");
+  ASSERT_EQ(quarter.code, 0) << quarter.err;
+  EXPECT_EQ(nlohmann::json::parse(quarter.out)["min_area_orientation"], false);
   // (A mesh without UVs is unwrapped first: Cli.UvpackPackUnwrapsAMeshWithoutUvs.)
 }
 

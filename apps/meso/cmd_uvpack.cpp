@@ -155,6 +155,7 @@ void add_uvpack(CLI::App& app, Context& ctx) {
     std::string input, output;
     UvPackOptions options;
     bool no_rotate = false;
+    bool quarter_turns = false;
     bool unwrap = false;
     std::string unwrap_method = "lscm";
     UvUnwrapOptions unwrap_options;
@@ -163,12 +164,15 @@ void add_uvpack(CLI::App& app, Context& ctx) {
     std::string quality = "balanced";
   };
   auto pack_args = std::make_shared<PackArgs>();
-  CLI::App* pack = uv->add_subcommand("pack", "Pack the mesh's UV charts into a square atlas with padding (one common scale, 90-degree turns)");
+  CLI::App* pack = uv->add_subcommand("pack", "Pack the mesh's UV charts into a square atlas with padding (one common scale; charts turned by quarter turns of their own or their minimum-area orientation)");
   pack->add_option("input", pack_args->input, "Mesh (its UV charts are kept as they are, unless --unwrap or it has no UVs)")->required();
   pack->add_option("-o,--output", pack_args->output, "Output mesh (.obj, .ply, .gltf, .glb)")->required();
   pack->add_option("--size", pack_args->options.size, "Atlas size in texels per side")->check(CLI::Range(1, 16384))->capture_default_str();
   pack->add_option("--padding", pack_args->options.padding, "Texels between charts (half of it to the border)")->check(CLI::Range(0, 256))->capture_default_str();
   pack->add_flag("--no-rotate", pack_args->no_rotate, "Keep every chart's orientation");
+  pack->add_flag("--quarter-turns", pack_args->quarter_turns,
+                 "Turn charts by multiples of 90 degrees of their input orientation only (by default each chart's minimum-area "
+                 "orientation is tried too)");
   pack->add_option("--quality", pack_args->quality,
                    "Search effort: fast (2 orientations, scale within 4 %), balanced (4 orientations, 1 %), best (also 3 chart orders, 0.25 %)")
       ->check(CLI::IsMember({"fast", "balanced", "best"}))
@@ -217,6 +221,7 @@ void add_uvpack(CLI::App& app, Context& ctx) {
       }
       UvPackOptions o = pack_args->options;
       o.rotate = !pack_args->no_rotate;
+      o.min_area_orientation = !pack_args->quarter_turns;
       o.quality = pack_args->quality == "fast" ? PackQuality::fast : pack_args->quality == "best" ? PackQuality::best : PackQuality::balanced;
       std::vector<ChartDetail> detail;
       std::vector<double> area_before;
@@ -257,6 +262,7 @@ void add_uvpack(CLI::App& app, Context& ctx) {
                 {"size", o.size},
                 {"padding", o.padding},
                 {"rotate", o.rotate},
+                {"min_area_orientation", o.rotate && o.min_area_orientation},
                 {"quality", pack_args->quality},
                 {"charts", r.charts},
                 {"scale", r.scale},

@@ -11,14 +11,20 @@
 namespace meso {
 
 // Search effort against utilisation: fast tries two orientations (0 and 90 degrees) and
-// stops the scale search within 4 %; balanced four orientations and 1 %; best also tries two
-// more chart orders (longest side first, UV area first) and stops within 0.25 %.
+// stops the scale search within 4 %; balanced four orientations and 1 %, then tries 6 variants
+// (3 chart orders: box area, longest side, UV area; each placed by lowest top or lowest bottom)
+// at scales above the one found, in at most min(18, 2400 / charts) more packings; best stops
+// within 0.25 % and tries 8 variants (also box perimeter) in at most min(64, 24000 / charts).
 enum class PackQuality { fast, balanced, best };
 
 struct UvPackOptions {
   int size = 1024;     // texels per side of the atlas
   int padding = 2;     // texels kept between charts (and to the atlas border: half of it)
   bool rotate = true;  // try quarter turns per chart (how many: quality)
+  // With rotate: also try the quarter turns of each chart's minimum-area orientation (the turn
+  // that makes its bounding box smallest), when that box is 1-10 % smaller than the input's, or
+  // only those when it is smaller still.
+  bool min_area_orientation = true;
   PackQuality quality = PackQuality::balanced;
   // Mip-safe padding down to level K (>= 0; -1: off). The guarantee below, which uv_check's
   // mip_safe verifies exactly; `size` must be a multiple of 2^K.
@@ -36,14 +42,16 @@ struct UvPackReport {
   int attempts = 0;           // packings tried while searching the scale
 };
 
-// Moves every chart (uv_charts) rigidly: rotation by a multiple of 90 degrees, one common
+// Moves every chart (uv_charts) rigidly: rotation by a multiple of 90 degrees (of the input's
+// orientation, or of the chart's minimum-area orientation: min_area_orientation), one common
 // scale (relative chart sizes are kept, or changed by exactly chart_scale), translation to
 // integer texel offsets. Guarantees,
 // at options.size: no texel is touched (conservatively: the triangle meets its square) by
 // two charts, and touched texels of different charts are at least `padding` texels apart
 // (Chebyshev, hence also Euclidean) and at least padding / 2 from the atlas border. The
 // scale is one at which the greedy placement succeeds, within the quality's tolerance of one at
-// which it fails (each packing's fill aims the next: 4-6 packings where bisection took 9). Charts with
+// which it fails (each packing's fill aims the next: 4-6 packings where bisection took 9), or a
+// larger one at which a variant succeeds (PackQuality). Charts with
 // no UV area keep a single texel. Deterministic.
 //
 // With mip_safe = K >= 0, also: no texel of MIP levels 0..K that a bilinear lookup inside a
