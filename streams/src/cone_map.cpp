@@ -669,13 +669,22 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
             std::array<Node, 4> kids;
             int count = 0;
             const int l = n.level - 1;
-            for (int cy = 2 * n.y; cy <= std::min(2 * n.y + 1, tree.h[static_cast<size_t>(l)] - 1); ++cy)
-              for (int cx = 2 * n.x; cx <= std::min(2 * n.x + 1, tree.w[static_cast<size_t>(l)] - 1); ++cx) {
-                const int cs = 1 << l;
+            const int cs = 1 << l, kw = tree.w[static_cast<size_t>(l)], kh = tree.h[static_cast<size_t>(l)];
+            const float* kid_max = tree.level[static_cast<size_t>(l)].data();
+            for (int cy = 2 * n.y; cy <= std::min(2 * n.y + 1, kh - 1); ++cy)
+              for (int cx = 2 * n.x; cx <= std::min(2 * n.x + 1, kw - 1); ++cx) {
+                // A child that the two tests at the top of this loop would skip when popped is
+                // not pushed: neither test changes the search, and the level they compare
+                // against only grows until then. The sort below is stable, so the children
+                // pushed keep their order, and the search takes the same steps.
+                const double km = kid_max[static_cast<size_t>(cy) * static_cast<size_t>(kw) + static_cast<size_t>(cx)];
+                if (km <= t) continue;
                 const Rect cr{ox + static_cast<double>(cx) * cs, oy + static_cast<double>(cy) * cs,
                               ox + std::min(static_cast<double>(cx + 1) * cs, static_cast<double>(w)),
                               oy + std::min(static_cast<double>(cy + 1) * cs, static_cast<double>(h))};
-                kids[static_cast<size_t>(count++)] = Node{l, cx, cy, rect_distance(cr, f)};
+                const double kd = rect_distance(cr, f);
+                if (kd > 0 && (km - t) / kd <= search.level()) continue;
+                kids[static_cast<size_t>(count++)] = Node{l, cx, cy, kd};
               }
             // Farthest pushed first, so the nearest is searched first (insertion sort of <= 4).
             for (int a = 1; a < count; ++a)
