@@ -130,21 +130,19 @@ class ConeSearch {
     return length(dx, dy);
   }
   // Some point of F sees the surface at (s, t) fall away: grad S . (y - x) < 0. Linear in x,
-  // so F's corners decide.
-  bool descends(const Piece& p, double s, double t) const {
-    const double gx = p.gx(t), gy = p.gy(s), x = p.x(s), y = p.y(t);
-    for (double fx : {f_.x0, f_.x1})
-      for (double fy : {f_.y0, f_.y1})
-        if (gx * (x - fx) + gy * (y - fy) < 0) return true;
-    return false;
+  // so F's corners decide; the sum is smallest at the corner where each of its two terms is,
+  // and rounding is monotone, so the smaller term along each axis gives the verdict of the
+  // four corners' sums, bit for bit.
+  bool descends(const Piece& p, double s, double t) const { return falls(p.gx(t), p.gy(s), p.x(s), p.y(t)); }
+  bool falls(double gx, double gy, double x, double y) const {
+    return std::min(gx * (x - f_.x0), gx * (x - f_.x1)) + std::min(gy * (y - f_.y0), gy * (y - f_.y1)) < 0;
   }
   // No point of the rectangle descends: grad S(y) . (y - x) is bilinear in y on a piece (the
   // gradient is affine and has no x^2 or y^2 term), so its minimum is at a corner.
   bool never_descends(const Piece& p, double s0, double t0, double s1, double t1) const {
-    for (double s : {s0, s1})
-      for (double t : {t0, t1})
-        if (descends(p, s, t)) return false;
-    return true;
+    const double gx0 = p.gx(t0), gx1 = p.gx(t1), gy0 = p.gy(s0), gy1 = p.gy(s1);
+    const double x0 = p.x(s0), x1 = p.x(s1), y0 = p.y(t0), y1 = p.y(t1);
+    return !(falls(gx0, gy0, x0, y0) || falls(gx1, gy0, x0, y1) || falls(gx0, gy1, x1, y0) || falls(gx1, gy1, x1, y1));
   }
   // Some single corner of F sees the whole rectangle descend: grad S(y) . (y - x) is
   // bilinear in y (see never_descends), so negative at the rectangle's corners means
@@ -201,10 +199,7 @@ class ConeSearch {
     const double d = distance(q.x, q.y);
     if (d <= 0 || q.v <= top_) return;
     if (relaxed_) {
-      bool falls = false;
-      for (double fx : {f_.x0, f_.x1})
-        for (double fy : {f_.y0, f_.y1}) falls |= q.gx * (q.x - fx) + q.gy * (q.y - fy) < 0;
-      if (!falls) return;
+      if (!falls(q.gx, q.gy, q.x, q.y)) return;
     }
     if ((q.v - top_) / d > psi) {
       psi = (q.v - top_) / d;
