@@ -120,7 +120,7 @@ class ConeSearch {
       boundary_max_ = !(p.value(sc_, tc_) < top_ && p.e * zx_ * zy_ < 0);
     }
     if (zx_ != 0 && zy_ != 0 && touches_ && p.value(sc_, tc_) >= top_) attain_corner_limit(p);
-    refine(p, 0, 0, 1, 1, 0);
+    refine(p, 0, 0, 1, 1, {p.value(0, 0), p.value(1, 0), p.value(0, 1), p.value(1, 1)}, 0xf, 0);
   }
 
  private:
@@ -227,14 +227,13 @@ class ConeSearch {
     psi = std::max(psi, gx >= 0 && gy >= 0 ? length(gx, gy) : std::max(gx, gy));
   }
 
-  void refine(const Piece& p, double s0, double t0, double s1, double t1, int depth) {
+  // v: S at the corners (s0, t0), (s1, t0), (s0, t1), (s1, t1), from the caller, which has
+  // evaluated them already (the same calls, so the same values). fresh: the corners not yet
+  // offered to attain(); a point offered again cannot raise psi, which only grows.
+  void refine(const Piece& p, double s0, double t0, double s1, double t1, const std::array<double, 4>& v, unsigned fresh, int depth) {
     const std::array<double, 4> ss = {s0, s1, s0, s1}, ts = {t0, t0, t1, t1};
-    std::array<double, 4> v{};
     double vmax = -kInf;
-    for (int k = 0; k < 4; ++k) {
-      v[k] = p.value(ss[k], ts[k]);
-      vmax = std::max(vmax, v[k]);  // a bilinear function's maximum is at a corner
-    }
+    for (int k = 0; k < 4; ++k) vmax = std::max(vmax, v[k]);  // a bilinear function's maximum is at a corner
     if (vmax <= top_) return;
     if (relaxed_ && never_descends(p, s0, t0, s1, t1)) return;
 
@@ -267,7 +266,8 @@ class ConeSearch {
       if (boundary_max_ && (!relaxed_ || descends_throughout(p, s0, t0, s1, t1))) {
         // The supremum is on the boundary. (Relaxed cones only where one corner of F sees
         // the whole rectangle descend: there every point counts, as for conservative ones.)
-        for (int k = 0; k < 4; ++k) attain(p, ss[k], ts[k], v[k]);
+        for (int k = 0; k < 4; ++k)
+          if (fresh & (1u << k)) attain(p, ss[k], ts[k], v[k]);
         for (double t : {t0, t1}) edge_maximum(p, t, s0, s1, true);
         for (double s : {s0, s1}) edge_maximum(p, s, t0, t1, false);
         return;
@@ -307,17 +307,22 @@ class ConeSearch {
       }
     }
     if (upper <= level()) return;
-    for (int k = 0; k < 4; ++k) attain(p, ss[k], ts[k], v[k]);
+    for (int k = 0; k < 4; ++k)
+      if (fresh & (1u << k)) attain(p, ss[k], ts[k], v[k]);
     const double sm = 0.5 * (s0 + s1), tm = 0.5 * (t0 + t1);
-    attain(p, sm, tm, p.value(sm, tm));
+    const double vm = p.value(sm, tm);
+    attain(p, sm, tm, vm);
     if (upper <= std::max(psi * (1 + tol_), bound) || depth >= max_depth_) {
       bound = std::max(bound, upper);
       return;
     }
-    refine(p, s0, t0, sm, tm, depth + 1);
-    refine(p, sm, t0, s1, tm, depth + 1);
-    refine(p, s0, tm, sm, t1, depth + 1);
-    refine(p, sm, tm, s1, t1, depth + 1);
+    // The children's corners: this rectangle's corners and centre (offered above) and the
+    // midpoints of its edges.
+    const double top_mid = p.value(sm, t0), left_mid = p.value(s0, tm), right_mid = p.value(s1, tm), bottom_mid = p.value(sm, t1);
+    refine(p, s0, t0, sm, tm, {v[0], top_mid, left_mid, vm}, 0x6, depth + 1);
+    refine(p, sm, t0, s1, tm, {top_mid, v[1], vm, right_mid}, 0x9, depth + 1);
+    refine(p, s0, tm, sm, t1, {left_mid, vm, v[2], bottom_mid}, 0x9, depth + 1);
+    refine(p, sm, tm, s1, t1, {vm, right_mid, bottom_mid, v[3]}, 0x6, depth + 1);
   }
 
   Rect f_;
