@@ -606,6 +606,23 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
       double d;  // distance to the footprint, computed once when the node is pushed
     };
     std::vector<Node> stack;
+    // The planes and gradient boxes of leaf texels, which the tree does not store (7 floats
+    // a texel), computed when first needed and kept in a small direct-mapped cache: the
+    // searches of neighbouring texels open mostly the same leaves. The same functions of the
+    // same grid values, so what is cached is what would be computed again.
+    struct LeafBounds {
+      int x = -1, y = -1;
+      bool has_plane = false, has_box = false;
+      std::array<float, 3> plane{};
+      std::array<float, 4> box{};
+    };
+    constexpr int kCacheSide = 64;
+    std::vector<LeafBounds> leaf_cache(kCacheSide * kCacheSide);
+    auto leaf = [&](int x, int y) -> LeafBounds& {
+      LeafBounds& e = leaf_cache[static_cast<size_t>((y % kCacheSide) * kCacheSide + x % kCacheSide)];
+      if (e.x != x || e.y != y) e = LeafBounds{x, y};
+      return e;
+    };
     for (int j = rows.begin(); j < rows.end(); ++j) {
       // Seeds chain along a row only, so results never depend on how rows are split among
       // threads.
@@ -652,14 +669,16 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
               continue;
             if (n.level == 0) {
               if (d > 0) {  // as for larger nodes, the plane is tested only apart from F
-                std::array<float, 3> plane{};
-                texel_plane(g, n.x, n.y, plane.data());
-                if (under(plane.data())) continue;
+                LeafBounds& e = leaf(n.x, n.y);
+                if (!e.has_plane) texel_plane(g, n.x, n.y, e.plane.data());
+                e.has_plane = true;
+                if (under(e.plane.data())) continue;
               }
               if (relaxed_kind) {
-                std::array<float, 4> box{};
-                texel_gradients(g, n.x, n.y, box.data());
-                if (rises_away(box.data(), r, f)) continue;
+                LeafBounds& e = leaf(n.x, n.y);
+                if (!e.has_box) texel_gradients(g, n.x, n.y, e.box.data());
+                e.has_box = true;
+                if (rises_away(e.box.data(), r, f)) continue;
               }
               for (int b = 2 * n.y; b <= 2 * n.y + 1; ++b)
                 for (int a = 2 * n.x; a <= 2 * n.x + 1; ++a)
