@@ -603,6 +603,7 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
   tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {
     struct Node {
       int level, x, y;
+      float m;   // the node's maximum
       double d;  // distance to the footprint, computed once when the node is pushed
     };
     std::vector<Node> stack;
@@ -640,11 +641,11 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
         // first; a node whose maximum cannot beat the slope attained so far is skipped.
         auto visit = [&](double ox, double oy) {
           stack.clear();
-          stack.push_back({root, 0, 0, rect_distance(Rect{ox, oy, ox + w, oy + h}, f)});
+          stack.push_back({root, 0, 0, static_cast<float>(global_max), rect_distance(Rect{ox, oy, ox + w, oy + h}, f)});
           while (!stack.empty() && search.psi < cap) {
             const Node n = stack.back();
             stack.pop_back();
-            const double m = tree.at(n.level, n.x, n.y);
+            const double m = n.m;
             if (m <= t) continue;
             const int size = 1 << n.level;
             const Rect r{ox + static_cast<double>(n.x) * size, oy + static_cast<double>(n.y) * size,
@@ -690,20 +691,26 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
             const int l = n.level - 1;
             const int cs = 1 << l, kw = tree.w[static_cast<size_t>(l)], kh = tree.h[static_cast<size_t>(l)];
             const float* kid_max = tree.level[static_cast<size_t>(l)].data();
-            for (int cy = 2 * n.y; cy <= std::min(2 * n.y + 1, kh - 1); ++cy)
-              for (int cx = 2 * n.x; cx <= std::min(2 * n.x + 1, kw - 1); ++cx) {
+            // The children's gaps to F along each axis, shared by the children in a column or row.
+            const int cx0 = 2 * n.x, cx1 = std::min(2 * n.x + 1, kw - 1), cy0 = 2 * n.y, cy1 = std::min(2 * n.y + 1, kh - 1);
+            std::array<double, 2> gap_x{}, gap_y{};
+            for (int cx = cx0; cx <= cx1; ++cx)
+              gap_x[static_cast<size_t>(cx - cx0)] =
+                  gap(f.x0, f.x1, ox + static_cast<double>(cx) * cs, ox + std::min(static_cast<double>(cx + 1) * cs, static_cast<double>(w)));
+            for (int cy = cy0; cy <= cy1; ++cy)
+              gap_y[static_cast<size_t>(cy - cy0)] =
+                  gap(f.y0, f.y1, oy + static_cast<double>(cy) * cs, oy + std::min(static_cast<double>(cy + 1) * cs, static_cast<double>(h)));
+            for (int cy = cy0; cy <= cy1; ++cy)
+              for (int cx = cx0; cx <= cx1; ++cx) {
                 // A child that the two tests at the top of this loop would skip when popped is
                 // not pushed: neither test changes the search, and the level they compare
                 // against only grows until then. The sort below is stable, so the children
                 // pushed keep their order, and the search takes the same steps.
-                const double km = kid_max[static_cast<size_t>(cy) * static_cast<size_t>(kw) + static_cast<size_t>(cx)];
+                const float km = kid_max[static_cast<size_t>(cy) * static_cast<size_t>(kw) + static_cast<size_t>(cx)];
                 if (km <= t) continue;
-                const Rect cr{ox + static_cast<double>(cx) * cs, oy + static_cast<double>(cy) * cs,
-                              ox + std::min(static_cast<double>(cx + 1) * cs, static_cast<double>(w)),
-                              oy + std::min(static_cast<double>(cy + 1) * cs, static_cast<double>(h))};
-                const double kd = rect_distance(cr, f);
+                const double kd = length(gap_x[static_cast<size_t>(cx - cx0)], gap_y[static_cast<size_t>(cy - cy0)]);  // as rect_distance
                 if (kd > 0 && (km - t) / kd <= search.level()) continue;
-                kids[static_cast<size_t>(count++)] = Node{l, cx, cy, kd};
+                kids[static_cast<size_t>(count++)] = Node{l, cx, cy, km, kd};
               }
             // Farthest pushed first, so the nearest is searched first (insertion sort of <= 4).
             for (int a = 1; a < count; ++a)
