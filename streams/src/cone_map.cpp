@@ -178,8 +178,9 @@ class ConeSearch {
     }
   }
   void attain(const Piece& p, double s, double t, double v) {
+    if (v <= top_) return;  // most points offered; the distance is not needed for them
     const double d = distance(p.x(s), p.y(t));
-    if (d <= 0 || v <= top_) return;
+    if (d <= 0) return;
     if (relaxed_ && !descends(p, s, t)) return;
     if ((v - top_) / d > psi) {
       psi = (v - top_) / d;
