@@ -529,10 +529,15 @@ double plane_excess(const float* plane, const Rect& r, const Rect& f, double top
   auto h = [&](double x, double y) {
     return a + gx * (x - ncx) + gy * (y - ncy) - psi * length(gap(f.x0, f.x1, x, x), gap(f.y0, f.y1, y, y));
   };
-  // Corners first: a positive one settles it (the caller only asks whether it is <= 0).
+  // Corners first: a positive one settles it (the caller only asks whether it is <= 0), the
+  // one nearest F first, where h is most often positive (h falls by psi per unit away from F).
+  // When none is, all four are taken, in any order.
   double best = -kInf;
-  for (double y : {r.y0, r.y1})
-    for (double x : {r.x0, r.x1}) {
+  const bool right = r.x0 + r.x1 < f.x0 + f.x1, below = r.y0 + r.y1 < f.y0 + f.y1;
+  const double near_x = right ? r.x1 : r.x0, far_x = right ? r.x0 : r.x1;
+  const double near_y = below ? r.y1 : r.y0, far_y = below ? r.y0 : r.y1;
+  for (double y : {near_y, far_y})
+    for (double x : {near_x, far_x}) {
       best = std::max(best, h(x, y));
       if (best > 0) return best;
     }
