@@ -509,11 +509,12 @@ MaxTree max_tree(std::vector<float> top, const HalfGrid& grid, int width, int he
 // No point of the rectangle r is seen descending from F: grad S(y) . (y - x) >= 0 for every
 // corner x of F, with the gradient anywhere in its box (interval products, so safe).
 bool rises_away(const float* box, const Rect& r, const Rect& f) {
+  // Per corner of F the two terms' minima are added; the smallest sum over F's corners is
+  // the sum of the smaller term along each axis (rounding is monotone: the same verdict).
   auto low = [](double g0, double g1, double d0, double d1) { return std::min({g0 * d0, g0 * d1, g1 * d0, g1 * d1}); };
-  for (double fx : {f.x0, f.x1})
-    for (double fy : {f.y0, f.y1})
-      if (low(box[0], box[1], r.x0 - fx, r.x1 - fx) + low(box[2], box[3], r.y0 - fy, r.y1 - fy) < 0) return false;
-  return true;
+  const double along_x = std::min(low(box[0], box[1], r.x0 - f.x0, r.x1 - f.x0), low(box[0], box[1], r.x0 - f.x1, r.x1 - f.x1));
+  const double along_y = std::min(low(box[2], box[3], r.y0 - f.y0, r.y1 - f.y0), low(box[2], box[3], r.y0 - f.y1, r.y1 - f.y1));
+  return !(along_x + along_y < 0);
 }
 
 // Upper bound of S(y) - psi dist(y, F) - T over the rectangle r (disjoint from F's
