@@ -181,9 +181,9 @@ class ConeSearch {
     if (v <= top_) return;  // most points offered; the distance is not needed for them
     const double d = distance(p.x(s), p.y(t));
     if (d <= 0) return;
-    if (relaxed_ && !descends(p, s, t)) return;
-    if ((v - top_) / d > psi) {
-      psi = (v - top_) / d;
+    const double ratio = (v - top_) / d;
+    if (ratio > psi && (!relaxed_ || descends(p, s, t))) {  // the cheaper test first
+      psi = ratio;
       best = {p.x(s), p.y(t), v, p.gx(t), p.gy(s), true};
     }
   }
