@@ -120,7 +120,7 @@ class ConeSearch {
       boundary_max_ = !(p.value(sc_, tc_) < top_ && p.e * zx_ * zy_ < 0);
     }
     if (zx_ != 0 && zy_ != 0 && touches_ && p.value(sc_, tc_) >= top_) attain_corner_limit(p);
-    refine(p, 0, 0, 1, 1, 0);
+    refine(p, 0, 0, 1, 1, {p.value(0, 0), p.value(1, 0), p.value(0, 1), p.value(1, 1)}, 0xf, 0);
   }
 
  private:
@@ -130,21 +130,19 @@ class ConeSearch {
     return length(dx, dy);
   }
   // Some point of F sees the surface at (s, t) fall away: grad S . (y - x) < 0. Linear in x,
-  // so F's corners decide.
-  bool descends(const Piece& p, double s, double t) const {
-    const double gx = p.gx(t), gy = p.gy(s), x = p.x(s), y = p.y(t);
-    for (double fx : {f_.x0, f_.x1})
-      for (double fy : {f_.y0, f_.y1})
-        if (gx * (x - fx) + gy * (y - fy) < 0) return true;
-    return false;
+  // so F's corners decide; the sum is smallest at the corner where each of its two terms is,
+  // and rounding is monotone, so the smaller term along each axis gives the verdict of the
+  // four corners' sums, bit for bit.
+  bool descends(const Piece& p, double s, double t) const { return falls(p.gx(t), p.gy(s), p.x(s), p.y(t)); }
+  bool falls(double gx, double gy, double x, double y) const {
+    return std::min(gx * (x - f_.x0), gx * (x - f_.x1)) + std::min(gy * (y - f_.y0), gy * (y - f_.y1)) < 0;
   }
   // No point of the rectangle descends: grad S(y) . (y - x) is bilinear in y on a piece (the
   // gradient is affine and has no x^2 or y^2 term), so its minimum is at a corner.
   bool never_descends(const Piece& p, double s0, double t0, double s1, double t1) const {
-    for (double s : {s0, s1})
-      for (double t : {t0, t1})
-        if (descends(p, s, t)) return false;
-    return true;
+    const double gx0 = p.gx(t0), gx1 = p.gx(t1), gy0 = p.gy(s0), gy1 = p.gy(s1);
+    const double x0 = p.x(s0), x1 = p.x(s1), y0 = p.y(t0), y1 = p.y(t1);
+    return !(falls(gx0, gy0, x0, y0) || falls(gx1, gy0, x0, y1) || falls(gx0, gy1, x1, y0) || falls(gx1, gy1, x1, y1));
   }
   // Some single corner of F sees the whole rectangle descend: grad S(y) . (y - x) is
   // bilinear in y (see never_descends), so negative at the rectangle's corners means
@@ -180,11 +178,12 @@ class ConeSearch {
     }
   }
   void attain(const Piece& p, double s, double t, double v) {
+    if (v <= top_) return;  // most points offered; the distance is not needed for them
     const double d = distance(p.x(s), p.y(t));
-    if (d <= 0 || v <= top_) return;
-    if (relaxed_ && !descends(p, s, t)) return;
-    if ((v - top_) / d > psi) {
-      psi = (v - top_) / d;
+    if (d <= 0) return;
+    const double ratio = (v - top_) / d;
+    if (ratio > psi && (!relaxed_ || descends(p, s, t))) {  // the cheaper test first
+      psi = ratio;
       best = {p.x(s), p.y(t), v, p.gx(t), p.gy(s), true};
     }
   }
@@ -201,10 +200,7 @@ class ConeSearch {
     const double d = distance(q.x, q.y);
     if (d <= 0 || q.v <= top_) return;
     if (relaxed_) {
-      bool falls = false;
-      for (double fx : {f_.x0, f_.x1})
-        for (double fy : {f_.y0, f_.y1}) falls |= q.gx * (q.x - fx) + q.gy * (q.y - fy) < 0;
-      if (!falls) return;
+      if (!falls(q.gx, q.gy, q.x, q.y)) return;
     }
     if ((q.v - top_) / d > psi) {
       psi = (q.v - top_) / d;
@@ -232,14 +228,13 @@ class ConeSearch {
     psi = std::max(psi, gx >= 0 && gy >= 0 ? length(gx, gy) : std::max(gx, gy));
   }
 
-  void refine(const Piece& p, double s0, double t0, double s1, double t1, int depth) {
+  // v: S at the corners (s0, t0), (s1, t0), (s0, t1), (s1, t1), from the caller, which has
+  // evaluated them already (the same calls, so the same values). fresh: the corners not yet
+  // offered to attain(); a point offered again cannot raise psi, which only grows.
+  void refine(const Piece& p, double s0, double t0, double s1, double t1, const std::array<double, 4>& v, unsigned fresh, int depth) {
     const std::array<double, 4> ss = {s0, s1, s0, s1}, ts = {t0, t0, t1, t1};
-    std::array<double, 4> v{};
     double vmax = -kInf;
-    for (int k = 0; k < 4; ++k) {
-      v[k] = p.value(ss[k], ts[k]);
-      vmax = std::max(vmax, v[k]);  // a bilinear function's maximum is at a corner
-    }
+    for (int k = 0; k < 4; ++k) vmax = std::max(vmax, v[k]);  // a bilinear function's maximum is at a corner
     if (vmax <= top_) return;
     if (relaxed_ && never_descends(p, s0, t0, s1, t1)) return;
 
@@ -272,7 +267,8 @@ class ConeSearch {
       if (boundary_max_ && (!relaxed_ || descends_throughout(p, s0, t0, s1, t1))) {
         // The supremum is on the boundary. (Relaxed cones only where one corner of F sees
         // the whole rectangle descend: there every point counts, as for conservative ones.)
-        for (int k = 0; k < 4; ++k) attain(p, ss[k], ts[k], v[k]);
+        for (int k = 0; k < 4; ++k)
+          if (fresh & (1u << k)) attain(p, ss[k], ts[k], v[k]);
         for (double t : {t0, t1}) edge_maximum(p, t, s0, s1, true);
         for (double s : {s0, s1}) edge_maximum(p, s, t0, t1, false);
         return;
@@ -312,17 +308,22 @@ class ConeSearch {
       }
     }
     if (upper <= level()) return;
-    for (int k = 0; k < 4; ++k) attain(p, ss[k], ts[k], v[k]);
+    for (int k = 0; k < 4; ++k)
+      if (fresh & (1u << k)) attain(p, ss[k], ts[k], v[k]);
     const double sm = 0.5 * (s0 + s1), tm = 0.5 * (t0 + t1);
-    attain(p, sm, tm, p.value(sm, tm));
+    const double vm = p.value(sm, tm);
+    attain(p, sm, tm, vm);
     if (upper <= std::max(psi * (1 + tol_), bound) || depth >= max_depth_) {
       bound = std::max(bound, upper);
       return;
     }
-    refine(p, s0, t0, sm, tm, depth + 1);
-    refine(p, sm, t0, s1, tm, depth + 1);
-    refine(p, s0, tm, sm, t1, depth + 1);
-    refine(p, sm, tm, s1, t1, depth + 1);
+    // The children's corners: this rectangle's corners and centre (offered above) and the
+    // midpoints of its edges.
+    const double top_mid = p.value(sm, t0), left_mid = p.value(s0, tm), right_mid = p.value(s1, tm), bottom_mid = p.value(sm, t1);
+    refine(p, s0, t0, sm, tm, {v[0], top_mid, left_mid, vm}, 0x6, depth + 1);
+    refine(p, sm, t0, s1, tm, {top_mid, v[1], vm, right_mid}, 0x9, depth + 1);
+    refine(p, s0, tm, sm, t1, {left_mid, vm, v[2], bottom_mid}, 0x9, depth + 1);
+    refine(p, sm, tm, s1, t1, {vm, right_mid, bottom_mid, v[3]}, 0x6, depth + 1);
   }
 
   Rect f_;
@@ -508,11 +509,12 @@ MaxTree max_tree(std::vector<float> top, const HalfGrid& grid, int width, int he
 // No point of the rectangle r is seen descending from F: grad S(y) . (y - x) >= 0 for every
 // corner x of F, with the gradient anywhere in its box (interval products, so safe).
 bool rises_away(const float* box, const Rect& r, const Rect& f) {
+  // Per corner of F the two terms' minima are added; the smallest sum over F's corners is
+  // the sum of the smaller term along each axis (rounding is monotone: the same verdict).
   auto low = [](double g0, double g1, double d0, double d1) { return std::min({g0 * d0, g0 * d1, g1 * d0, g1 * d1}); };
-  for (double fx : {f.x0, f.x1})
-    for (double fy : {f.y0, f.y1})
-      if (low(box[0], box[1], r.x0 - fx, r.x1 - fx) + low(box[2], box[3], r.y0 - fy, r.y1 - fy) < 0) return false;
-  return true;
+  const double along_x = std::min(low(box[0], box[1], r.x0 - f.x0, r.x1 - f.x0), low(box[0], box[1], r.x0 - f.x1, r.x1 - f.x1));
+  const double along_y = std::min(low(box[2], box[3], r.y0 - f.y0, r.y1 - f.y0), low(box[2], box[3], r.y0 - f.y1, r.y1 - f.y1));
+  return !(along_x + along_y < 0);
 }
 
 // Upper bound of S(y) - psi dist(y, F) - T over the rectangle r (disjoint from F's
@@ -528,10 +530,15 @@ double plane_excess(const float* plane, const Rect& r, const Rect& f, double top
   auto h = [&](double x, double y) {
     return a + gx * (x - ncx) + gy * (y - ncy) - psi * length(gap(f.x0, f.x1, x, x), gap(f.y0, f.y1, y, y));
   };
-  // Corners first: a positive one settles it (the caller only asks whether it is <= 0).
+  // Corners first: a positive one settles it (the caller only asks whether it is <= 0), the
+  // one nearest F first, where h is most often positive (h falls by psi per unit away from F).
+  // When none is, all four are taken, in any order.
   double best = -kInf;
-  for (double y : {r.y0, r.y1})
-    for (double x : {r.x0, r.x1}) {
+  const bool right = r.x0 + r.x1 < f.x0 + f.x1, below = r.y0 + r.y1 < f.y0 + f.y1;
+  const double near_x = right ? r.x1 : r.x0, far_x = right ? r.x0 : r.x1;
+  const double near_y = below ? r.y1 : r.y0, far_y = below ? r.y0 : r.y1;
+  for (double y : {near_y, far_y})
+    for (double x : {near_x, far_x}) {
       best = std::max(best, h(x, y));
       if (best > 0) return best;
     }
@@ -603,9 +610,27 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
   tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {
     struct Node {
       int level, x, y;
+      float m;   // the node's maximum
       double d;  // distance to the footprint, computed once when the node is pushed
     };
     std::vector<Node> stack;
+    // The planes and gradient boxes of leaf texels, which the tree does not store (7 floats
+    // a texel), computed when first needed and kept in a small direct-mapped cache: the
+    // searches of neighbouring texels open mostly the same leaves. The same functions of the
+    // same grid values, so what is cached is what would be computed again.
+    struct LeafBounds {
+      int x = -1, y = -1;
+      bool has_plane = false, has_box = false;
+      std::array<float, 3> plane{};
+      std::array<float, 4> box{};
+    };
+    constexpr int kCacheSide = 64;
+    std::vector<LeafBounds> leaf_cache(kCacheSide * kCacheSide);
+    auto leaf = [&](int x, int y) -> LeafBounds& {
+      LeafBounds& e = leaf_cache[static_cast<size_t>((y % kCacheSide) * kCacheSide + x % kCacheSide)];
+      if (e.x != x || e.y != y) e = LeafBounds{x, y};
+      return e;
+    };
     for (int j = rows.begin(); j < rows.end(); ++j) {
       // Seeds chain along a row only, so results never depend on how rows are split among
       // threads.
@@ -623,11 +648,11 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
         // first; a node whose maximum cannot beat the slope attained so far is skipped.
         auto visit = [&](double ox, double oy) {
           stack.clear();
-          stack.push_back({root, 0, 0, rect_distance(Rect{ox, oy, ox + w, oy + h}, f)});
+          stack.push_back({root, 0, 0, static_cast<float>(global_max), rect_distance(Rect{ox, oy, ox + w, oy + h}, f)});
           while (!stack.empty() && search.psi < cap) {
             const Node n = stack.back();
             stack.pop_back();
-            const double m = tree.at(n.level, n.x, n.y);
+            const double m = n.m;
             if (m <= t) continue;
             const int size = 1 << n.level;
             const Rect r{ox + static_cast<double>(n.x) * size, oy + static_cast<double>(n.y) * size,
@@ -652,14 +677,16 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
               continue;
             if (n.level == 0) {
               if (d > 0) {  // as for larger nodes, the plane is tested only apart from F
-                std::array<float, 3> plane{};
-                texel_plane(g, n.x, n.y, plane.data());
-                if (under(plane.data())) continue;
+                LeafBounds& e = leaf(n.x, n.y);
+                if (!e.has_plane) texel_plane(g, n.x, n.y, e.plane.data());
+                e.has_plane = true;
+                if (under(e.plane.data())) continue;
               }
               if (relaxed_kind) {
-                std::array<float, 4> box{};
-                texel_gradients(g, n.x, n.y, box.data());
-                if (rises_away(box.data(), r, f)) continue;
+                LeafBounds& e = leaf(n.x, n.y);
+                if (!e.has_box) texel_gradients(g, n.x, n.y, e.box.data());
+                e.has_box = true;
+                if (rises_away(e.box.data(), r, f)) continue;
               }
               for (int b = 2 * n.y; b <= 2 * n.y + 1; ++b)
                 for (int a = 2 * n.x; a <= 2 * n.x + 1; ++a)
@@ -669,13 +696,28 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
             std::array<Node, 4> kids;
             int count = 0;
             const int l = n.level - 1;
-            for (int cy = 2 * n.y; cy <= std::min(2 * n.y + 1, tree.h[static_cast<size_t>(l)] - 1); ++cy)
-              for (int cx = 2 * n.x; cx <= std::min(2 * n.x + 1, tree.w[static_cast<size_t>(l)] - 1); ++cx) {
-                const int cs = 1 << l;
-                const Rect cr{ox + static_cast<double>(cx) * cs, oy + static_cast<double>(cy) * cs,
-                              ox + std::min(static_cast<double>(cx + 1) * cs, static_cast<double>(w)),
-                              oy + std::min(static_cast<double>(cy + 1) * cs, static_cast<double>(h))};
-                kids[static_cast<size_t>(count++)] = Node{l, cx, cy, rect_distance(cr, f)};
+            const int cs = 1 << l, kw = tree.w[static_cast<size_t>(l)], kh = tree.h[static_cast<size_t>(l)];
+            const float* kid_max = tree.level[static_cast<size_t>(l)].data();
+            // The children's gaps to F along each axis, shared by the children in a column or row.
+            const int cx0 = 2 * n.x, cx1 = std::min(2 * n.x + 1, kw - 1), cy0 = 2 * n.y, cy1 = std::min(2 * n.y + 1, kh - 1);
+            std::array<double, 2> gap_x{}, gap_y{};
+            for (int cx = cx0; cx <= cx1; ++cx)
+              gap_x[static_cast<size_t>(cx - cx0)] =
+                  gap(f.x0, f.x1, ox + static_cast<double>(cx) * cs, ox + std::min(static_cast<double>(cx + 1) * cs, static_cast<double>(w)));
+            for (int cy = cy0; cy <= cy1; ++cy)
+              gap_y[static_cast<size_t>(cy - cy0)] =
+                  gap(f.y0, f.y1, oy + static_cast<double>(cy) * cs, oy + std::min(static_cast<double>(cy + 1) * cs, static_cast<double>(h)));
+            for (int cy = cy0; cy <= cy1; ++cy)
+              for (int cx = cx0; cx <= cx1; ++cx) {
+                // A child that the two tests at the top of this loop would skip when popped is
+                // not pushed: neither test changes the search, and the level they compare
+                // against only grows until then. The sort below is stable, so the children
+                // pushed keep their order, and the search takes the same steps.
+                const float km = kid_max[static_cast<size_t>(cy) * static_cast<size_t>(kw) + static_cast<size_t>(cx)];
+                if (km <= t) continue;
+                const double kd = length(gap_x[static_cast<size_t>(cx - cx0)], gap_y[static_cast<size_t>(cy - cy0)]);  // as rect_distance
+                if (kd > 0 && (km - t) / kd <= search.level()) continue;
+                kids[static_cast<size_t>(count++)] = Node{l, cx, cy, km, kd};
               }
             // Farthest pushed first, so the nearest is searched first (insertion sort of <= 4).
             for (int a = 1; a < count; ++a)
