@@ -65,8 +65,8 @@ void compare(Context& ctx, const Args& args, const Mesh& base, const PreviewMaps
   report["base"] = base_report;
   report["outputs"] = written;
   if (!ctx.globals.json) {
-    std::printf("reference: %zu triangles (longest UV edge %.3g texels), built in %.0f ms, traced in %.0f ms\n",
-                c.reference_triangles, c.reference_max_edge_texels, c.reference_build_ms, c.reference_ms);
+    std::printf("reference: %zu exact bilinear cells, %zu triangles (longest UV edge %.3g texels), built in %.0f ms, traced in %.0f ms\n",
+                c.reference_patches, c.reference_triangles, c.reference_max_edge_texels, c.reference_build_ms, c.reference_ms);
     std::printf("%-20s %10s %9s %8s %10s %9s %10s\n", "method", "wrong hits", "rmse", "psnr", "mean fetch", "p99 fetch", "ms");
     for (const auto& m : c.methods)
       std::printf("%-20s %10.4f %9.5f %8.2f %10.1f %9.0f %10.2f\n", m.name.c_str(), m.wrong_hit_fraction, m.rmse, m.psnr,
