@@ -74,6 +74,7 @@ struct Options {
   double target = 0.01; // wrong-hit fraction for the equal-error comparison
   double uv_tolerance = 1.0;
   double reference_edge = 0.5;  // texels: the reference's longest sub-triangle edge
+  bool triangulated_reference = false;  // tessellate the flat plane too (the reference before the exact cells)
   std::vector<std::string> maps = {"rocks", "bricks", "mountains"};
   std::vector<double> views = {30, 60, 80};
   std::vector<int> budgets = {1, 2, 4, 8, 16, 32, 64, 128, 256};
@@ -103,9 +104,19 @@ const char* kUsage =
     "  --uv-tolerance T     texels; a visible point farther from the reference's is wrong (default 1)\n"
     "  --reference-edge E   texels; the reference's longest sub-triangle edge (default 0.5): smaller\n"
     "                       follows the bilinear surface more closely, at 4x the triangles per halving\n"
+    "                       (only with --triangulated-reference: the plane is flat, intersected exactly)\n"
+    "  --triangulated-reference  tessellate the plane as well instead of intersecting the bilinear\n"
+    "                       height surface cell by cell (the reference before it was exact)\n"
     "  --no-check           skip the cross-check against compare_methods()\n"
     "  --images             also write maps/<map>/<method>_<angle>.png at each method's largest budget:\n"
     "                       red = missed first intersection, yellow = other wrong hit, grey = right\n";
+
+ReferenceOptions reference_options_of(const Options& o) {
+  ReferenceOptions r;
+  r.max_edge_texels = o.reference_edge;
+  r.bilinear_patches = !o.triangulated_reference;
+  return r;
+}
 
 [[noreturn]] void usage_error(const std::string& what) {
   std::fprintf(stderr, "preview_curves: %s\n%s", what.c_str(), kUsage);
@@ -153,6 +164,10 @@ Options parse(int argc, char** argv) {
     }
     if (a == "--images") {
       o.images = true;
+      continue;
+    }
+    if (a == "--triangulated-reference") {
+      o.triangulated_reference = true;
       continue;
     }
     static const std::set<std::string> valued = {"--out", "--map-size", "--pixels", "--tiles", "--relief", "--views", "--azimuth", "--zoom",
@@ -772,11 +787,11 @@ int main(int argc, char** argv) {
       for (const auto& m : s.methods)
         if (std::find(all_methods.begin(), all_methods.end(), m) == all_methods.end()) all_methods.push_back(m);
       const auto t0 = std::chrono::steady_clock::now();
-      ReferenceOptions reference_options;
-      reference_options.max_edge_texels = o.reference_edge;
+      const ReferenceOptions reference_options = reference_options_of(o);
       const ReferenceRenderer reference(s.base, s.maps, reference_options);
-      std::printf("  reference: %zu triangles, longest edge %.2f texels, built in %.1f s\n", reference.triangle_count(),
-                  reference.max_edge_texels(), std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+      std::printf("  reference: %zu exact bilinear cells, %zu triangles (longest edge %.2f texels), built in %.1f s\n",
+                  reference.patch_count(), reference.triangle_count(), reference.max_edge_texels(),
+                  std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
       HeadlessPreview gpu(s.base, s.maps);
       for (double view : o.views) {
         PreviewOptions v;
@@ -785,7 +800,9 @@ int main(int argc, char** argv) {
         v.camera.azimuth = static_cast<float>(o.azimuth);
         v.camera.zoom = static_cast<float>(o.zoom > 0 ? o.zoom : default_zoom(view));
         v.shade = PreviewShade::uv;
+        const auto tr = std::chrono::steady_clock::now();
         const Image ref_uv = reference.render(v);
+        std::printf("  reference at %g deg: traced in %.2f s\n", view, std::chrono::duration<double>(std::chrono::steady_clock::now() - tr).count());
         v.shade = PreviewShade::lit;
         const Image ref_lit = reference.render(v);
         write_image(ref_lit, o.out / "maps" / name / ("reference_" + fmt("%g", view) + ".png"), PixelFormat::uint8);
@@ -863,6 +880,7 @@ int main(int argc, char** argv) {
         co.view = v;
         co.view.iterations = b;
         co.uv_tolerance_texels = o.uv_tolerance;
+        co.reference = reference_options_of(o);  // the same reference as the measurement's
         co.repetitions = 1;
         co.methods = s.methods;
         const Comparison c = compare_methods(s.base, s.maps, co);
