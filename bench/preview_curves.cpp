@@ -501,13 +501,18 @@ Eye eye_of(const Mesh& base, const PreviewCamera& cam) {
   return e;
 }
 
-// Pixels whose ray, inside the relief slab 0 <= z <= relief, crosses the border of the plane
-// (with a margin of 2 texels): there the displaced sheet outgrows the base mesh's silhouette
-// (or ends under the ray), which no per-pixel method can draw. 1 = boundary pixel.
+// Pixels whose ray, inside the relief slab 0 <= z <= relief, comes within 2 texels of the
+// border of the plane (from inside or outside): there the displaced sheet outgrows the base
+// mesh's silhouette (or ends under the ray), which no per-pixel method can draw. 1 = boundary
+// pixel: the ray's slab segment is not wholly inside the plane shrunk by the margin, yet
+// reaches the plane grown by it. (Until 2026-12-02 a pixel was counted only when its segment
+// had points on both sides of the shrunk plane's edge: a ray that stays within the margin
+// band, hits the sheet there and leaves over the border was taken for an interior pixel.)
 std::vector<char> boundary_mask(const Eye& e, int width, int height, double relief, double tiles, int map_size) {
   std::vector<char> mask(static_cast<size_t>(width) * static_cast<size_t>(height), 0);
   const double m = 2.0 / map_size;
   auto inside = [&](double x, double y) { return x >= m && x <= tiles - m && y >= m && y <= tiles - m; };
+  auto near = [&](double x, double y) { return x >= -m && x <= tiles + m && y >= -m && y <= tiles + m; };
   for (int y = 0; y < height; ++y)
     for (int x = 0; x < width; ++x) {
       const double nx = 2.0 * (x + 0.5) / width - 1.0, ny = 1.0 - 2.0 * (y + 0.5) / height;
@@ -515,12 +520,13 @@ std::vector<char> boundary_mask(const Eye& e, int width, int height, double reli
       for (int i = 0; i < 3; ++i) d[i] = e.f[i] + e.r[i] * nx * static_cast<double>(width) / height * e.tan_half_fov + e.u[i] * ny * e.tan_half_fov;
       if (!(d[2] < 0)) continue;  // never reaches the slab: no sheet, no base
       const double t0 = (e.z - relief) / -d[2], t1 = e.z / -d[2];
-      bool in = false, out = false;
+      bool all_inside = true, reaches = false;
       for (int k = 0; k <= 32; ++k) {
         const double t = t0 + (t1 - t0) * k / 32.0;
-        (inside(e.x + t * d[0], e.y + t * d[1]) ? in : out) = true;
+        all_inside = all_inside && inside(e.x + t * d[0], e.y + t * d[1]);
+        reaches = reaches || near(e.x + t * d[0], e.y + t * d[1]);
       }
-      mask[static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x)] = in && out;
+      mask[static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x)] = !all_inside && reaches;
     }
   return mask;
 }
