@@ -681,6 +681,31 @@ TEST(Measure, ReferenceIsWatertightAndDeterministic) {
   }
 }
 
+// Exact cells only where a whole connected part of the base is flat: a sheet flat on one half
+// and bent on the other is tessellated whole (an exact triangle beside a tessellated one would
+// leave a crack along their edge), and the bent half's reference still sees the flat half.
+TEST(Measure, ReferenceIsExactOnlyOverWhollyFlatParts) {
+  const PreviewMaps maps = cone_maps(ConeScene::rough, Border::clamp);
+  const Mesh flat = test::make_grid(4, 4);
+  const Mesh bent = test::make_parametric(8, 4, [](double s, double t) {
+    const double b = std::max(0.0, s - 0.5);
+    return Vec3f(static_cast<float>(s), static_cast<float>(t), static_cast<float>(0.8 * b * b));
+  }, false, false);
+  const ReferenceRenderer exact(flat, maps), mixed(bent, maps);
+  EXPECT_EQ(exact.triangle_count(), 0u);
+  EXPECT_GE(exact.patch_count(), 64u * 64u);
+  EXPECT_EQ(mixed.patch_count(), 0u);
+  EXPECT_GT(mixed.triangle_count(), 64u * 64u);
+  PreviewOptions o;
+  o.width = o.height = 48;
+  o.shade = PreviewShade::uv;
+  const Image img = mixed.render(o);
+  size_t covered = 0;
+  for (int y = 0; y < o.height; ++y)
+    for (int x = 0; x < o.width; ++x) covered += img.at(x, y, 3) > 0.5f;
+  EXPECT_GT(covered, 48u * 48u / 4);
+}
+
 PreviewMaps rough_maps_with_sdf() {
   PreviewMaps maps = cone_maps(ConeScene::rough, Border::clamp);
   const HeightField field = make_height_field(maps.displacement, Border::clamp);
