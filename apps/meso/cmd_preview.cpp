@@ -132,10 +132,10 @@ void add_preview(CLI::App& app, Context& ctx) {
                   "With --compare: texels between a method's visible point and the reference's beyond which a pixel is a wrong hit")
       ->check(CLI::PositiveNumber & Finite);
   sub->add_option("--reference-edge", args->reference_edge,
-                  "With --compare: longest UV edge of the reference's sub-triangles, in texels")
+                  "With --compare: longest UV edge of the reference's sub-triangles (over curved parts of the base; flat parts are intersected exactly), in texels")
       ->check(CLI::PositiveNumber & Finite);
   sub->add_option("--reference-triangles", args->reference_triangles,
-                  "With --compare: cap on the reference's triangle count (coarser sub-triangles beyond it)")
+                  "With --compare: cap on the reference's triangle and exact-cell count (coarser sub-triangles beyond it)")
       ->check(CLI::Range(size_t(1), size_t(1) << 30));
   sub->callback([&ctx, args, method_option] {
     const bool method_given = method_option->count() > 0;
