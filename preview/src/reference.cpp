@@ -312,8 +312,9 @@ struct ReferenceRenderer::Impl {
   // unless there would be more than `cap` (then every triangle is tessellated, under the cap).
   // Only whole connected parts of the mesh (faces joined by shared edges) that are flat
   // throughout are intersected exactly: along an edge between an exact and a tessellated
-  // triangle the two surfaces would differ (the bilinear curve against its chords, up to
-  // h'' L^2 / 8 ~ 0.4 texel for a rough map's saddles at L = 1/2 texel) and leave a crack.
+  // triangle the two surfaces would differ (the bilinear curve against its chords: up to
+  // h'' L^2 / 8 with h'' <= |a - b - c + d| <= 2 relief along a diagonal, 1/16 of the relief
+  // at L = 1/2 texel) and leave a crack.
   void build_patches(size_t cap) {
     const size_t nf = tris.size();
     for (BaseTriangle& t : tris) {
