@@ -1,8 +1,8 @@
 // The measuring instrument's reference: the true displaced surface ray traced with Embree 3
-// through the previewer's own camera. Over flat base triangles (one normal at all three
-// corners) the surface is exactly the bilinear height surface the per-pixel methods trace, and
-// is intersected cell by cell in closed form (bilinear_patch.hpp, Embree user geometry); over
-// curved ones it is tessellated below the texel size.
+// through the previewer's own camera. Over flat parts of the base (one normal at all three
+// corners of every triangle) the surface is exactly the bilinear height surface the per-pixel
+// methods trace, and is intersected cell by cell in closed form (bilinear_patch.hpp, Embree
+// user geometry); over curved ones it is tessellated below the texel size.
 #include "meso/preview/preview.hpp"
 
 #include "bilinear_patch.hpp"

@@ -179,11 +179,13 @@ class HeadlessPreview {
 // ---- The measuring instrument: a CPU reference of the true displaced surface ----
 
 struct ReferenceOptions {
-  // Flat base triangles (their three vertex normals agree within 1e-6) are not tessellated:
-  // the surface over them is the bilinear interpolation of the height texels displaced along
-  // their normal, which the reference intersects exactly, texel cell by texel cell (one Embree
-  // user primitive per cell a triangle overlaps, a quadratic along the ray in each). This is
-  // the surface the per-pixel methods trace. false: tessellate them too (the reference before
+  // Flat parts of the base (connected by shared edges, every vertex normal of the part's
+  // triangles within 1e-6 of the others at the same triangle) are not tessellated: the surface
+  // over them is the bilinear interpolation of the height texels displaced along their normal,
+  // which the reference intersects exactly, texel cell by texel cell (one Embree user
+  // primitive per cell a triangle overlaps, a quadratic along the ray in each). This is the
+  // surface the per-pixel methods trace. A part with one curved triangle is tessellated
+  // whole, so that no exact triangle meets a tessellated one (their edges would not match). false: tessellate them too (the reference before
   // the exact patches, kept to measure what the tessellation changes).
   bool bilinear_patches = true;
   // Each curved base triangle (or every one, without bilinear_patches) is cut by longest-edge bisection, edges measured in texels of the
