@@ -8,6 +8,7 @@
 #include "meso/streams/pyramid.hpp"
 #include "meso/streams/vdm.hpp"
 #include "renderer.hpp"
+#include "sampling.hpp"
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -704,6 +705,47 @@ TEST(Measure, ReferenceIsExactOnlyOverWhollyFlatParts) {
   for (int y = 0; y < o.height; ++y)
     for (int x = 0; x < o.width; ++x) covered += img.at(x, y, 3) > 0.5f;
   EXPECT_GT(covered, 48u * 48u / 4);
+}
+
+// The exact cells follow the tessellated reference's conventions (texel centres at +1/2, rows
+// from the top, the map tiled when the streams were made with wrap): on a quad over which the
+// rough map tiles twice, a fine tessellation (1/4 texel) finds the same visible points but
+// where its chords cut a ridge differently.
+TEST(Measure, ExactAndTessellatedReferencesAgreeOnATilingMap) {
+  Mesh quad = test::make_grid(1, 1);
+  for (auto h : quad.halfedges())
+    if (!quad.is_boundary(h)) quad.set_texcoord2D(h, quad.texcoord2D(h) * 2.0f);
+  const PreviewMaps maps = cone_maps(ConeScene::rough, Border::wrap);
+  ASSERT_TRUE(maps_tile(maps));
+  ReferenceOptions fine;
+  fine.bilinear_patches = false;
+  fine.max_edge_texels = 0.25;
+  const ReferenceRenderer exact(quad, maps), tessellated(quad, maps, fine);
+  ASSERT_GT(exact.patch_count(), 0u);
+  ASSERT_EQ(tessellated.patch_count(), 0u);
+  for (float angle : {20.0f, 60.0f}) {
+    PreviewOptions o;
+    o.width = o.height = 96;
+    o.camera.view_angle = angle;
+    o.camera.azimuth = 30.0f;
+    o.shade = PreviewShade::uv;
+    const Image a = exact.render(o), b = tessellated.render(o);
+    size_t both = 0, close = 0, coverage_differs = 0;
+    for (int y = 0; y < o.height; ++y)
+      for (int x = 0; x < o.width; ++x) {
+        const bool ca = a.at(x, y, 3) > 0.5f, cb = b.at(x, y, 3) > 0.5f;
+        coverage_differs += ca != cb;
+        if (!ca || !cb) continue;
+        ++both;
+        const double d = std::hypot((a.at(x, y, 0) - b.at(x, y, 0)) * 64.0, (a.at(x, y, 1) - b.at(x, y, 1)) * 64.0);
+        close += d < 0.05;
+      }
+    std::printf("%.0f deg: %zu of %zu pixels within 0.05 texel, coverage differs at %zu\n", static_cast<double>(angle), close, both,
+                coverage_differs);
+    EXPECT_GT(both, 96u * 96u / 5);
+    EXPECT_GE(static_cast<double>(close), 0.99 * static_cast<double>(both)) << angle;
+    EXPECT_LE(coverage_differs, 96u * 96u / 200) << angle;
+  }
 }
 
 PreviewMaps rough_maps_with_sdf() {
