@@ -72,6 +72,16 @@ void add_dstream(PreviewMaps& maps, const Mesh& base, const Mesh& high, int leve
   maps.dstream = encode_displacement_stream(sample_displacement_stream(base, high, o));
 }
 
+// A size x size frame of the visible points' UVs from `angle` degrees off the normal.
+PreviewOptions uv_view(int size, float angle, float azimuth) {
+  PreviewOptions o;
+  o.width = o.height = size;
+  o.camera.view_angle = angle;
+  o.camera.azimuth = azimuth;
+  o.shade = PreviewShade::uv;
+  return o;
+}
+
 // 65 x 65 pixels: the centre pixel's ray goes exactly through the look-at point, the centre
 // of the unit quad, UV (0.5, 0.5). With view angle a and azimuth 0 the eye lies toward +x.
 PreviewOptions centre_uv_options(const std::string& method, float view_angle) {
@@ -644,11 +654,7 @@ TEST(Measure, ReferenceIsWatertightAndDeterministic) {
   const double z_a = side * static_cast<double>(*lo), z_b = side * static_cast<double>(*hi);
   for (const bool exact : {true, false}) {
     for (float angle : {0.0f, 50.0f}) {
-      PreviewOptions o;
-      o.width = o.height = 80;
-      o.camera.view_angle = angle;
-      o.camera.azimuth = 25.0f;
-      o.shade = PreviewShade::uv;
+      const PreviewOptions o = uv_view(80, angle, 25.0f);
       ReferenceOptions ro;
       ro.bilinear_patches = exact;
       const ReferenceRenderer reference(sheet, maps, ro);
@@ -724,11 +730,7 @@ TEST(Measure, ExactAndTessellatedReferencesAgreeOnATilingMap) {
   ASSERT_GT(exact.patch_count(), 0u);
   ASSERT_EQ(tessellated.patch_count(), 0u);
   for (float angle : {20.0f, 60.0f}) {
-    PreviewOptions o;
-    o.width = o.height = 96;
-    o.camera.view_angle = angle;
-    o.camera.azimuth = 30.0f;
-    o.shade = PreviewShade::uv;
+    const PreviewOptions o = uv_view(96, angle, 30.0f);
     const Image a = exact.render(o), b = tessellated.render(o);
     size_t both = 0, close = 0, coverage_differs = 0;
     for (int y = 0; y < o.height; ++y)
