@@ -74,6 +74,7 @@ struct Options {
   double target = 0.01; // wrong-hit fraction for the equal-error comparison
   double uv_tolerance = 1.0;
   double reference_edge = 0.5;  // texels: the reference's longest sub-triangle edge
+  bool triangulated_reference = false;  // tessellate the flat plane too (the reference before the exact cells)
   std::vector<std::string> maps = {"rocks", "bricks", "mountains"};
   std::vector<double> views = {30, 60, 80};
   std::vector<int> budgets = {1, 2, 4, 8, 16, 32, 64, 128, 256};
@@ -103,9 +104,19 @@ const char* kUsage =
     "  --uv-tolerance T     texels; a visible point farther from the reference's is wrong (default 1)\n"
     "  --reference-edge E   texels; the reference's longest sub-triangle edge (default 0.5): smaller\n"
     "                       follows the bilinear surface more closely, at 4x the triangles per halving\n"
+    "                       (only with --triangulated-reference: the plane is flat, intersected exactly)\n"
+    "  --triangulated-reference  tessellate the plane as well instead of intersecting the bilinear\n"
+    "                       height surface cell by cell (the reference before it was exact)\n"
     "  --no-check           skip the cross-check against compare_methods()\n"
     "  --images             also write maps/<map>/<method>_<angle>.png at each method's largest budget:\n"
     "                       red = missed first intersection, yellow = other wrong hit, grey = right\n";
+
+ReferenceOptions reference_options_of(const Options& o) {
+  ReferenceOptions r;
+  r.max_edge_texels = o.reference_edge;
+  r.bilinear_patches = !o.triangulated_reference;
+  return r;
+}
 
 [[noreturn]] void usage_error(const std::string& what) {
   std::fprintf(stderr, "preview_curves: %s\n%s", what.c_str(), kUsage);
@@ -153,6 +164,10 @@ Options parse(int argc, char** argv) {
     }
     if (a == "--images") {
       o.images = true;
+      continue;
+    }
+    if (a == "--triangulated-reference") {
+      o.triangulated_reference = true;
       continue;
     }
     static const std::set<std::string> valued = {"--out", "--map-size", "--pixels", "--tiles", "--relief", "--views", "--azimuth", "--zoom",
@@ -486,13 +501,18 @@ Eye eye_of(const Mesh& base, const PreviewCamera& cam) {
   return e;
 }
 
-// Pixels whose ray, inside the relief slab 0 <= z <= relief, crosses the border of the plane
-// (with a margin of 2 texels): there the displaced sheet outgrows the base mesh's silhouette
-// (or ends under the ray), which no per-pixel method can draw. 1 = boundary pixel.
+// Pixels whose ray, inside the relief slab 0 <= z <= relief, comes within 2 texels of the
+// border of the plane (from inside or outside): there the displaced sheet outgrows the base
+// mesh's silhouette (or ends under the ray), which no per-pixel method can draw. 1 = boundary
+// pixel: the ray's slab segment is not wholly inside the plane shrunk by the margin, yet
+// reaches the plane grown by it. (Until 2026-12-02 a pixel was counted only when its segment
+// had points on both sides of the shrunk plane's edge: a ray that stays within the margin
+// band, hits the sheet there and leaves over the border was taken for an interior pixel.)
 std::vector<char> boundary_mask(const Eye& e, int width, int height, double relief, double tiles, int map_size) {
   std::vector<char> mask(static_cast<size_t>(width) * static_cast<size_t>(height), 0);
   const double m = 2.0 / map_size;
   auto inside = [&](double x, double y) { return x >= m && x <= tiles - m && y >= m && y <= tiles - m; };
+  auto near = [&](double x, double y) { return x >= -m && x <= tiles + m && y >= -m && y <= tiles + m; };
   for (int y = 0; y < height; ++y)
     for (int x = 0; x < width; ++x) {
       const double nx = 2.0 * (x + 0.5) / width - 1.0, ny = 1.0 - 2.0 * (y + 0.5) / height;
@@ -500,12 +520,13 @@ std::vector<char> boundary_mask(const Eye& e, int width, int height, double reli
       for (int i = 0; i < 3; ++i) d[i] = e.f[i] + e.r[i] * nx * static_cast<double>(width) / height * e.tan_half_fov + e.u[i] * ny * e.tan_half_fov;
       if (!(d[2] < 0)) continue;  // never reaches the slab: no sheet, no base
       const double t0 = (e.z - relief) / -d[2], t1 = e.z / -d[2];
-      bool in = false, out = false;
+      bool all_inside = true, reaches = false;
       for (int k = 0; k <= 32; ++k) {
         const double t = t0 + (t1 - t0) * k / 32.0;
-        (inside(e.x + t * d[0], e.y + t * d[1]) ? in : out) = true;
+        all_inside = all_inside && inside(e.x + t * d[0], e.y + t * d[1]);
+        reaches = reaches || near(e.x + t * d[0], e.y + t * d[1]);
       }
-      mask[static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x)] = in && out;
+      mask[static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x)] = !all_inside && reaches;
     }
   return mask;
 }
@@ -772,11 +793,11 @@ int main(int argc, char** argv) {
       for (const auto& m : s.methods)
         if (std::find(all_methods.begin(), all_methods.end(), m) == all_methods.end()) all_methods.push_back(m);
       const auto t0 = std::chrono::steady_clock::now();
-      ReferenceOptions reference_options;
-      reference_options.max_edge_texels = o.reference_edge;
+      const ReferenceOptions reference_options = reference_options_of(o);
       const ReferenceRenderer reference(s.base, s.maps, reference_options);
-      std::printf("  reference: %zu triangles, longest edge %.2f texels, built in %.1f s\n", reference.triangle_count(),
-                  reference.max_edge_texels(), std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+      std::printf("  reference: %zu exact bilinear cells, %zu triangles (longest edge %.2f texels), built in %.1f s\n",
+                  reference.patch_count(), reference.triangle_count(), reference.max_edge_texels(),
+                  std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
       HeadlessPreview gpu(s.base, s.maps);
       for (double view : o.views) {
         PreviewOptions v;
@@ -785,7 +806,9 @@ int main(int argc, char** argv) {
         v.camera.azimuth = static_cast<float>(o.azimuth);
         v.camera.zoom = static_cast<float>(o.zoom > 0 ? o.zoom : default_zoom(view));
         v.shade = PreviewShade::uv;
+        const auto tr = std::chrono::steady_clock::now();
         const Image ref_uv = reference.render(v);
+        std::printf("  reference at %g deg: traced in %.2f s\n", view, std::chrono::duration<double>(std::chrono::steady_clock::now() - tr).count());
         v.shade = PreviewShade::lit;
         const Image ref_lit = reference.render(v);
         write_image(ref_lit, o.out / "maps" / name / ("reference_" + fmt("%g", view) + ".png"), PixelFormat::uint8);
@@ -863,6 +886,7 @@ int main(int argc, char** argv) {
         co.view = v;
         co.view.iterations = b;
         co.uv_tolerance_texels = o.uv_tolerance;
+        co.reference = reference_options_of(o);  // the same reference as the measurement's
         co.repetitions = 1;
         co.methods = s.methods;
         const Comparison c = compare_methods(s.base, s.maps, co);

@@ -65,8 +65,8 @@ void compare(Context& ctx, const Args& args, const Mesh& base, const PreviewMaps
   report["base"] = base_report;
   report["outputs"] = written;
   if (!ctx.globals.json) {
-    std::printf("reference: %zu triangles (longest UV edge %.3g texels), built in %.0f ms, traced in %.0f ms\n",
-                c.reference_triangles, c.reference_max_edge_texels, c.reference_build_ms, c.reference_ms);
+    std::printf("reference: %zu exact bilinear cells, %zu triangles (longest UV edge %.3g texels), built in %.0f ms, traced in %.0f ms\n",
+                c.reference_patches, c.reference_triangles, c.reference_max_edge_texels, c.reference_build_ms, c.reference_ms);
     std::printf("%-20s %10s %9s %8s %10s %9s %10s\n", "method", "wrong hits", "rmse", "psnr", "mean fetch", "p99 fetch", "ms");
     for (const auto& m : c.methods)
       std::printf("%-20s %10.4f %9.5f %8.2f %10.1f %9.0f %10.2f\n", m.name.c_str(), m.wrong_hit_fraction, m.rmse, m.psnr,
@@ -132,10 +132,10 @@ void add_preview(CLI::App& app, Context& ctx) {
                   "With --compare: texels between a method's visible point and the reference's beyond which a pixel is a wrong hit")
       ->check(CLI::PositiveNumber & Finite);
   sub->add_option("--reference-edge", args->reference_edge,
-                  "With --compare: longest UV edge of the reference's sub-triangles, in texels")
+                  "With --compare: longest UV edge of the reference's sub-triangles (over curved parts of the base; flat parts are intersected exactly), in texels")
       ->check(CLI::PositiveNumber & Finite);
   sub->add_option("--reference-triangles", args->reference_triangles,
-                  "With --compare: cap on the reference's triangle count (coarser sub-triangles beyond it)")
+                  "With --compare: cap on the reference's triangle and exact-cell count (coarser sub-triangles beyond it)")
       ->check(CLI::Range(size_t(1), size_t(1) << 30));
   sub->callback([&ctx, args, method_option] {
     const bool method_given = method_option->count() > 0;

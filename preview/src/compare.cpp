@@ -94,6 +94,7 @@ Comparison compare_methods(const Mesh& base, const PreviewMaps& maps, const Comp
   c.uv_tolerance_texels = o.uv_tolerance_texels;
   const ReferenceRenderer reference(base, maps, o.reference);
   c.reference_triangles = reference.triangle_count();
+  c.reference_patches = reference.patch_count();
   c.reference_max_edge_texels = reference.max_edge_texels();
   c.reference_build_ms = reference.build_ms();
   PreviewOptions v = o.view;
@@ -129,6 +130,7 @@ Comparison compare_methods(const Mesh& base, const PreviewMaps& maps, const Comp
 
 std::string comparison_json(const Comparison& c) {
   std::string s = "{\"reference\": {\"triangles\": " + std::to_string(c.reference_triangles) +
+                  ", \"patches\": " + std::to_string(c.reference_patches) +
                   ", \"max_edge_texels\": " + number(c.reference_max_edge_texels) + ", \"build_ms\": " + number(c.reference_build_ms) +
                   ", \"ms\": " + number(c.reference_ms) + "}";
   s += ", \"width\": " + std::to_string(c.view.width) + ", \"height\": " + std::to_string(c.view.height);

@@ -1,7 +1,11 @@
-// The measuring instrument's reference: the true displaced surface, tessellated below the
-// texel size and ray traced with Embree 3 through the previewer's own camera.
+// The measuring instrument's reference: the true displaced surface ray traced with Embree 3
+// through the previewer's own camera. Over flat parts of the base (one normal at all three
+// corners of every triangle) the surface is exactly the bilinear height surface the per-pixel
+// methods trace, and is intersected cell by cell in closed form (bilinear_patch.hpp, Embree
+// user geometry); over curved ones it is tessellated below the texel size.
 #include "meso/preview/preview.hpp"
 
+#include "bilinear_patch.hpp"
 #include "camera.hpp"
 #include "meso/bake/tangent_frame.hpp"
 #include "meso/core/error.hpp"
@@ -34,6 +38,22 @@ struct BaseTriangle {
   std::array<Vec2d, 3> uv;      // this face's corner UVs
   Vec3d face_normal{0, 0, 1};   // unit; where the interpolated normal vanishes
   bool valid = false;
+  // Flat (its vertex normals agree): the surface over it is intersected exactly, per cell, in
+  // `patch`'s frame (relative to Impl::origin), and it is not tessellated.
+  bool patched = false;
+  FlatPatchFrame patch;
+  std::array<Vec2d, 3> xy;  // corners in texel coordinates (bilinear_patch.hpp)
+};
+
+// Vertex normals that differ by less than this (unit vectors, Euclidean) count as one: the
+// float rounding of normals averaged over a plane's faces (~1e-7); the constant-normal
+// surface then departs from the interpolated one by under 1e-6 of the height.
+constexpr double kFlatNormalTolerance = 1e-6;
+
+// One piece of a flat triangle's surface: the part over texel cell (i, j).
+struct Piece {
+  uint32_t face;
+  int32_t i, j;
 };
 
 // Bisection levels at most (a sub-triangle of depth d has 1 / 2^d of its base triangle's
@@ -174,6 +194,9 @@ struct ReferenceRenderer::Impl {
   std::vector<float> positions;   // 4 floats per vertex (Embree's 16-byte loads)
   std::vector<float> barycentrics;  // per vertex: its base barycentrics on corners 1 and 2
   std::vector<uint32_t> indices, triangle_face;
+  std::vector<Piece> pieces;          // the flat triangles' cells, in face order
+  std::vector<RTCBounds> piece_bounds;  // their boxes (relative to origin), for Embree's build
+  unsigned patch_geometry = RTC_INVALID_GEOMETRY_ID;
   double max_edge = 0, build_ms = 0;
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;
@@ -184,7 +207,10 @@ struct ReferenceRenderer::Impl {
     if (!has_uvs(base)) throw std::logic_error("reference: base mesh without UVs");
     const auto t0 = std::chrono::steady_clock::now();
     frames = compute_tangent_frames(base);
-    tessellate(o);
+    prepare_triangles();
+    const size_t cap = std::max<size_t>(o.max_triangles, 1);
+    if (o.bilinear_patches) build_patches(cap);
+    tessellate(o, std::max<size_t>(cap - std::min(cap, pieces.size()), 1));
     build_scene();
     build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   }
@@ -196,6 +222,14 @@ struct ReferenceRenderer::Impl {
   Impl& operator=(const Impl&) = delete;
 
   double height(const Vec2d& uv) const { return sample_linear(displacement, 0, uv[0], uv[1], wrap); }
+
+  // Cell (i, j)'s four texels under the border rule, as sample_linear reads them.
+  CellHeights cell_heights(int i, int j) const {
+    const int w = displacement.width, h = displacement.height;
+    const int xa = texel_index(i, w, wrap), xb = texel_index(i + 1.0, w, wrap), ya = texel_index(j, h, wrap),
+              yb = texel_index(j + 1.0, h, wrap);
+    return CellHeights{displacement.at(xa, ya), displacement.at(xb, ya), displacement.at(xa, yb), displacement.at(xb, yb)};
+  }
 
   // The true displaced point over base point `b` of triangle t: P + h(uv) N / |N| with P, N
   // and uv interpolated; on a base edge from the edge's canonical orientation (the lower
@@ -230,7 +264,7 @@ struct ReferenceRenderer::Impl {
     const double w = displacement.width, h = displacement.height;
     tbb::parallel_for(tbb::blocked_range<size_t>(0, tris.size()), [&](const tbb::blocked_range<size_t>& range) {
       for (size_t f = range.begin(); f < range.end() && !over.load(std::memory_order_relaxed); ++f) {
-        if (!tris[f].valid) continue;
+        if (!tris[f].valid || tris[f].patched) continue;
         struct Counter {
           size_t count = 0, cap;
           const std::atomic<bool>* over;
@@ -247,7 +281,7 @@ struct ReferenceRenderer::Impl {
     return !over;
   }
 
-  void tessellate(const ReferenceOptions& o) {
+  void prepare_triangles() {
     const size_t nf = base.n_faces();
     const double w = displacement.width, h = displacement.height;
     tris.assign(nf, BaseTriangle{});
@@ -268,9 +302,116 @@ struct ReferenceRenderer::Impl {
       t.valid = true;
       const Vec3d fn = OpenMesh::cross(t.p[1] - t.p[0], t.p[2] - t.p[0]);
       if (fn.norm() > 0) t.face_normal = fn / fn.norm();
+      for (size_t k = 0; k < 3; ++k) t.xy[k] = Vec2d(t.uv[k][0] * w - 0.5, (1.0 - t.uv[k][1]) * h - 0.5);
     }
+    const Box3 box = bounding_box(base);
+    origin = OpenMesh::vector_cast<Vec3d>(box.center());
+  }
+
+  // The flat triangles' frames and their pieces, one per texel cell they overlap with area,
+  // unless there would be more than `cap` (then every triangle is tessellated, under the cap).
+  // Only whole connected parts of the mesh (faces joined by shared edges) that are flat
+  // throughout are intersected exactly: along an edge between an exact and a tessellated
+  // triangle the two surfaces would differ (the bilinear curve against its chords: up to
+  // h'' L^2 / 8 with h'' <= |a - b - c + d| <= 2 relief along a diagonal, 1/16 of the relief
+  // at L = 1/2 texel) and leave a crack.
+  void build_patches(size_t cap) {
+    const size_t nf = tris.size();
+    for (BaseTriangle& t : tris) {
+      if (!t.valid) continue;
+      std::array<Vec3d, 3> unit;
+      for (size_t k = 0; k < 3; ++k) unit[k] = t.n[k].norm() > 0 ? t.n[k] / t.n[k].norm() : Vec3d(0, 0, 0);
+      if ((unit[1] - unit[0]).norm() > kFlatNormalTolerance || (unit[2] - unit[0]).norm() > kFlatNormalTolerance) continue;
+      Vec3d n = unit[0] + unit[1] + unit[2];
+      if (!(n.norm() > 0.5)) continue;  // zero normals: the tessellation falls back on the face normal
+      n /= n.norm();
+      const std::array<Vec3d, 3> p{t.p[0] - origin, t.p[1] - origin, t.p[2] - origin};
+      bool near = true;  // cell indices must fit an int
+      for (const Vec2d& q : t.xy) near = near && std::abs(q[0]) < 1e8 && std::abs(q[1]) < 1e8;
+      t.patched = near && make_flat_patch_frame(p, t.xy, n, t.patch);
+    }
+    // Connected parts with a face that is not flat (or not valid) are tessellated whole.
+    std::vector<int> part_of(nf, -1);
+    std::vector<size_t> stack;
+    for (size_t seed = 0; seed < nf; ++seed) {
+      if (part_of[seed] >= 0) continue;
+      std::vector<size_t> members;
+      bool all_flat = true;
+      part_of[seed] = static_cast<int>(seed);
+      stack.push_back(seed);
+      while (!stack.empty()) {
+        const size_t f = stack.back();
+        stack.pop_back();
+        members.push_back(f);
+        all_flat = all_flat && tris[f].patched;
+        for (auto g : base.ff_range(FaceHandle(static_cast<int>(f)))) {
+          const size_t gi = static_cast<size_t>(g.idx());
+          if (part_of[gi] >= 0) continue;
+          part_of[gi] = static_cast<int>(seed);
+          stack.push_back(gi);
+        }
+      }
+      if (!all_flat)
+        for (size_t f : members) tris[f].patched = false;
+    }
+    double cells = 0;  // an upper bound: the cells of each flat triangle's texel box
+    for (const BaseTriangle& t : tris) {
+      if (!t.patched) continue;
+      const auto [x_lo, x_hi] = std::minmax({t.xy[0][0], t.xy[1][0], t.xy[2][0]});
+      const auto [y_lo, y_hi] = std::minmax({t.xy[0][1], t.xy[1][1], t.xy[2][1]});
+      cells += (std::floor(x_hi) - std::floor(x_lo) + 1) * (std::floor(y_hi) - std::floor(y_lo) + 1);
+    }
+    if (!(cells <= static_cast<double>(cap))) {
+      for (BaseTriangle& t : tris) t.patched = false;
+      return;
+    }
+    struct Part {
+      std::vector<Piece> pieces;
+      std::vector<RTCBounds> bounds;
+    };
+    std::vector<Part> parts(nf);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, nf), [&](const tbb::blocked_range<size_t>& range) {
+      for (size_t f = range.begin(); f < range.end(); ++f) {
+        const BaseTriangle& t = tris[f];
+        if (!t.patched) continue;
+        const auto [x_lo, x_hi] = std::minmax({t.xy[0][0], t.xy[1][0], t.xy[2][0]});
+        const auto [y_lo, y_hi] = std::minmax({t.xy[0][1], t.xy[1][1], t.xy[2][1]});
+        for (int j = static_cast<int>(std::floor(y_lo)); j <= static_cast<int>(std::floor(y_hi)); ++j)
+          for (int i = static_cast<int>(std::floor(x_lo)); i <= static_cast<int>(std::floor(x_hi)); ++i) {
+            const std::vector<Vec2d> poly = clip_to_cell(t.xy, i, j);
+            if (poly.empty()) continue;
+            // The surface over the piece lies between the polygon's base points moved by the
+            // cell's lowest and highest texel (a bilinear polynomial stays within its corners).
+            const CellHeights c = cell_heights(i, j);
+            const double lo = std::min({c.a, c.b, c.c, c.d}), hi = std::max({c.a, c.b, c.c, c.d});
+            Vec3d bmin(std::numeric_limits<double>::infinity()), bmax(-std::numeric_limits<double>::infinity());
+            for (const Vec2d& q : poly) {
+              const Vec3d b = t.patch.p0 + t.patch.px * (q[0] - t.patch.x0) + t.patch.py * (q[1] - t.patch.y0);
+              for (double s : {lo, hi}) {
+                bmin.minimize(b + t.patch.n * s);
+                bmax.maximize(b + t.patch.n * s);
+              }
+            }
+            // Padded for the float box and the pieces' 1e-9-texel growth (bilinear_patch.hpp).
+            const double pad = 1e-5 * ((bmax - bmin).max() + bmax.max_abs() + bmin.max_abs());
+            parts[f].bounds.push_back(RTCBounds{static_cast<float>(bmin[0] - pad), static_cast<float>(bmin[1] - pad),
+                                                static_cast<float>(bmin[2] - pad), 0.0f, static_cast<float>(bmax[0] + pad),
+                                                static_cast<float>(bmax[1] + pad), static_cast<float>(bmax[2] + pad), 0.0f});
+            parts[f].pieces.push_back(Piece{static_cast<uint32_t>(f), i, j});
+          }
+      }
+    });
+    for (Part& part : parts) {
+      pieces.insert(pieces.end(), part.pieces.begin(), part.pieces.end());
+      piece_bounds.insert(piece_bounds.end(), part.bounds.begin(), part.bounds.end());
+      part = Part();
+    }
+  }
+
+  void tessellate(const ReferenceOptions& o, size_t cap) {
+    const size_t nf = base.n_faces();
+    const double w = displacement.width, h = displacement.height;
     // The cap: the target edge doubles (up to 8 times), then the depth is limited.
-    const size_t cap = std::max<size_t>(o.max_triangles, 1);
     double target = o.max_edge_texels > 0 ? o.max_edge_texels : 0.5;
     int max_depth = kMaxDepth;
     bool ok = fits(target, max_depth, cap);
@@ -294,12 +435,10 @@ struct ReferenceRenderer::Impl {
       std::vector<uint32_t> triangles;
       double longest = 0;
     };
-    const Box3 box = bounding_box(base);
-    origin = OpenMesh::vector_cast<Vec3d>(box.center());
     std::vector<Part> parts(nf);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, nf), [&](const tbb::blocked_range<size_t>& range) {
       for (size_t f = range.begin(); f < range.end(); ++f) {
-        if (!tris[f].valid) continue;
+        if (!tris[f].valid || tris[f].patched) continue;
         struct Builder {
           const Impl& impl;
           const BaseTriangle& t;
@@ -369,12 +508,67 @@ struct ReferenceRenderer::Impl {
       rtcAttachGeometry(scene, geom);
       rtcReleaseGeometry(geom);
     }
+    if (!pieces.empty()) {
+      RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
+      rtcSetGeometryUserPrimitiveCount(geom, static_cast<unsigned>(pieces.size()));
+      rtcSetGeometryUserData(geom, this);
+      rtcSetGeometryBoundsFunction(geom, &Impl::piece_box, this);
+      rtcSetGeometryIntersectFunction(geom, &Impl::intersect_piece);
+      rtcCommitGeometry(geom);
+      patch_geometry = rtcAttachGeometry(scene, geom);
+      rtcReleaseGeometry(geom);
+    }
     rtcCommitScene(scene);
     if (rtcGetDeviceError(device) != RTC_ERROR_NONE) throw InternalError("Embree: reference scene build failed (out of memory?)");
   }
 
-  void shade(const PreviewOptions& o, const CameraPose& pose, uint32_t prim, float bu, float bv, float* out) const {
-    // The hit's base barycentrics (interpolated over the sub-triangle), then its UV.
+  // The ray, in double, that the pieces' intersection reads (Embree passes the context
+  // through; its rays are float), and the nearest piece hit so far.
+  struct RayContext {
+    RTCIntersectContext context;  // first: Embree's pointer to it is a pointer to this
+    Vec3d org, dir;
+    double t = std::numeric_limits<double>::infinity();
+    uint32_t piece = 0;
+    PatchHit hit;
+  };
+
+  static void piece_box(const RTCBoundsFunctionArguments* args) {
+    *args->bounds_o = static_cast<const Impl*>(args->geometryUserPtr)->piece_bounds[args->primID];
+  }
+
+  // Embree's callback for one piece (rtcIntersect1: one ray). The nearest hit wins, in
+  // double; between hits at the same t, the lower piece index, so that the result does not
+  // depend on the traversal order.
+  static void intersect_piece(const RTCIntersectFunctionNArguments* args) {
+    if (args->N != 1 || !args->valid[0]) return;
+    const Impl& impl = *static_cast<const Impl*>(args->geometryUserPtr);
+    RayContext& rc = *reinterpret_cast<RayContext*>(args->context);
+    RTCRayHit& rh = *reinterpret_cast<RTCRayHit*>(args->rayhit);
+    const Piece& piece = impl.pieces[args->primID];
+    PatchHit hit;
+    const double t_max = std::min(rc.t, static_cast<double>(rh.ray.tfar));
+    if (!intersect_bilinear_cell(impl.tris[piece.face].patch, piece.i, piece.j, impl.cell_heights(piece.i, piece.j), rc.org, rc.dir,
+                                 static_cast<double>(rh.ray.tnear), t_max, hit))
+      return;
+    if (hit.t > rc.t || (hit.t == rc.t && args->primID > rc.piece)) return;
+    rc.t = hit.t;
+    rc.piece = args->primID;
+    rc.hit = hit;
+    // The next float up: a piece at the same t in double is still visited.
+    rh.ray.tfar = std::nextafter(static_cast<float>(hit.t), std::numeric_limits<float>::infinity());
+    rh.hit.u = static_cast<float>(hit.fx);
+    rh.hit.v = static_cast<float>(hit.fy);
+    const Vec3d& n = impl.tris[piece.face].patch.n;
+    rh.hit.Ng_x = static_cast<float>(n[0]);
+    rh.hit.Ng_y = static_cast<float>(n[1]);
+    rh.hit.Ng_z = static_cast<float>(n[2]);
+    rh.hit.primID = args->primID;
+    rh.hit.geomID = args->geomID;
+    rh.hit.instID[0] = args->context->instID[0];
+  }
+
+  // A sub-triangle hit's base point: barycentrics interpolated over the sub-triangle.
+  void shade_triangle(const PreviewOptions& o, const CameraPose& pose, uint32_t prim, float bu, float bv, float* out) const {
     const uint32_t* tri = &indices[3 * static_cast<size_t>(prim)];
     const double w[3] = {1.0 - static_cast<double>(bu) - static_cast<double>(bv), static_cast<double>(bu), static_cast<double>(bv)};
     double b1 = 0, b2 = 0;
@@ -384,8 +578,24 @@ struct ReferenceRenderer::Impl {
     }
     const size_t face = triangle_face[static_cast<size_t>(prim)];
     const BaseTriangle& bt = tris[face];
-    const double b[3] = {1.0 - b1 - b2, b1, b2};
-    const Vec2d uv = bt.uv[0] * b[0] + bt.uv[1] * b[1] + bt.uv[2] * b[2];
+    const std::array<double, 3> b{1.0 - b1 - b2, b1, b2};
+    shade(o, pose, face, b, bt.uv[0] * b[0] + bt.uv[1] * b[1] + bt.uv[2] * b[2], out);
+  }
+
+  // A piece hit's base point: texel coordinates (i + fx, j + fy), UV by sample_linear's
+  // convention inverted, barycentrics by the frame's affine weights.
+  void shade_piece(const PreviewOptions& o, const CameraPose& pose, uint32_t index, const PatchHit& hit, float* out) const {
+    const Piece& piece = pieces[index];
+    const FlatPatchFrame& f = tris[piece.face].patch;
+    const double x = piece.i + hit.fx, y = piece.j + hit.fy;
+    std::array<double, 3> b;
+    for (size_t k = 0; k < 3; ++k) b[k] = f.bary[k][0] + f.bary[k][1] * x + f.bary[k][2] * y;
+    const Vec2d uv((x + 0.5) / displacement.width, 1.0 - (y + 0.5) / displacement.height);
+    shade(o, pose, piece.face, b, uv, out);
+  }
+
+  // The visible point over base point b (barycentrics) of face `face`, at `uv`.
+  void shade(const PreviewOptions& o, const CameraPose& pose, size_t face, const std::array<double, 3>& b, const Vec2d& uv, float* out) const {
     const double a[2] = {uv[0], uv[1]};
     out[3] = 1.0f;
     if (o.shade == PreviewShade::uv) {
@@ -436,8 +646,10 @@ struct ReferenceRenderer::Impl {
           Vec3d org, dir;
           pixel_ray(pose, x, y, o.width, o.height, org, dir);
           org -= origin;
-          RTCIntersectContext ctx;
-          rtcInitIntersectContext(&ctx);
+          RayContext rc;
+          rtcInitIntersectContext(&rc.context);
+          rc.org = org;
+          rc.dir = dir;
           RTCRayHit rh{};
           rh.ray.org_x = static_cast<float>(org[0]);
           rh.ray.org_y = static_cast<float>(org[1]);
@@ -449,15 +661,19 @@ struct ReferenceRenderer::Impl {
           rh.ray.tfar = std::numeric_limits<float>::infinity();
           rh.ray.mask = 0xFFFFFFFFu;
           rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-          rtcIntersect1(scene, &ctx, &rh);
+          rtcIntersect1(scene, &rc.context, &rh);
           if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
-          shade(o, pose, rh.hit.primID, rh.hit.u, rh.hit.v, out.texel(x, y));
+          if (rh.hit.geomID == patch_geometry)
+            shade_piece(o, pose, rc.piece, rc.hit, out.texel(x, y));
+          else
+            shade_triangle(o, pose, rh.hit.primID, rh.hit.u, rh.hit.v, out.texel(x, y));
         }
     });
     out.metadata["method"] = std::string("reference");
     out.metadata["view_angle"] = o.camera.view_angle;
     out.metadata["azimuth"] = o.camera.azimuth;
     out.metadata["triangles"] = static_cast<int>(std::min<size_t>(triangle_face.size(), std::numeric_limits<int>::max()));
+    out.metadata["patches"] = static_cast<int>(std::min<size_t>(pieces.size(), std::numeric_limits<int>::max()));
     return out;
   }
 };
@@ -470,6 +686,8 @@ ReferenceRenderer::~ReferenceRenderer() = default;
 Image ReferenceRenderer::render(const PreviewOptions& options) const { return impl_->render(options); }
 
 size_t ReferenceRenderer::triangle_count() const { return impl_->triangle_face.size(); }
+
+size_t ReferenceRenderer::patch_count() const { return impl_->pieces.size(); }
 
 double ReferenceRenderer::max_edge_texels() const { return impl_->max_edge; }
 

@@ -179,10 +179,20 @@ class HeadlessPreview {
 // ---- The measuring instrument: a CPU reference of the true displaced surface ----
 
 struct ReferenceOptions {
-  // Each base triangle is cut by longest-edge bisection, edges measured in texels of the
+  // Flat parts of the base (connected by shared edges, every vertex normal of the part's
+  // triangles within 1e-6 of the others at the same triangle) are not tessellated: the surface
+  // over them is the bilinear interpolation of the height texels displaced along their normal,
+  // which the reference intersects exactly, texel cell by texel cell (one Embree user
+  // primitive per cell a triangle overlaps, a quadratic along the ray in each). This is the
+  // surface the per-pixel methods trace. A part with one curved triangle is tessellated
+  // whole, so that no exact triangle meets a tessellated one (their edges would not match). false: tessellate them too (the reference before
+  // the exact patches, kept to measure what the tessellation changes).
+  bool bilinear_patches = true;
+  // Each curved base triangle (or every one, without bilinear_patches) is cut by longest-edge bisection, edges measured in texels of the
   // displacement map (u W, v H), until no sub-triangle edge is longer than this.
   double max_edge_texels = 0.5;
-  // Cap on the total sub-triangle count. While the mesh would need more, max_edge_texels
+  // Cap on the total count of sub-triangles and cells. When the flat triangles' cells (counted
+  // over their UV boxes) exceed it, every triangle is tessellated. While the mesh would need more, max_edge_texels
   // doubles (up to 8 times), then the bisection depth is limited; max_edge_texels() reports
   // what was reached. Memory: about 110 bytes per triangle with Embree's structure (the
   // demo's 1024 x 1024 map at 0.5 texel: 28 M triangles, 3.1 GB).
@@ -192,7 +202,9 @@ struct ReferenceOptions {
 // The TRUE displaced surface ray traced with Embree 3: every base point p(b) moved along its
 // normalised interpolated vertex normal by the displacement map sampled at its UV exactly as
 // the shaders' GL_LINEAR lookups do (texel centres at +0.5; border clamp, or wrap when a
-// loaded stream was made with --wrap), tessellated as described in ReferenceOptions. A
+// loaded stream was made with --wrap): exactly over flat base triangles, tessellated over
+// curved ones as described in ReferenceOptions. Pieces of flat triangles reach 1e-9 texel past
+// their cell and triangle edges, so rays through shared edges and corners always hit. A
 // sub-triangle edge is cut at its midpoint exactly when it is longer than the target, which
 // depends on the edge alone, so neighbouring triangles cut shared edges alike, and points on
 // an edge between base triangles with the same UVs there are computed bitwise alike from
@@ -209,7 +221,8 @@ class ReferenceRenderer {
   // The same image as render_headless for options.width x height, camera and shade, pixel
   // centres and camera identical to the OpenGL renderer's (frame_camera), rows from the top,
   // RGBA float, alpha 1 where the ray hits the displaced surface and 0 elsewhere (RGB 0):
-  //   uv:     R, G = the hit's UV (interpolated along the sub-triangle), B = 0;
+  //   uv:     R, G = the hit's UV (exact on a flat triangle, interpolated along the
+  //           sub-triangle on a curved one), B = 0;
   //   height: R = the displacement map at the hit's UV (the shader's lookup);
   //   lit:    the shader's Lambert term with the normal map at the hit's UV decoded in the
   //           base frame at the hit's base point, flipped on base faces turned away from
@@ -218,8 +231,9 @@ class ReferenceRenderer {
   // result does not depend on the number of threads.
   Image render(const PreviewOptions& options) const;
 
-  size_t triangle_count() const;
-  // The longest UV edge of any sub-triangle, in texels of the displacement map.
+  size_t triangle_count() const;  // sub-triangles of the curved base triangles
+  size_t patch_count() const;     // cells of the flat ones, intersected exactly
+  // The longest UV edge of any sub-triangle (0 when every triangle is flat), in texels of the displacement map.
   double max_edge_texels() const;
   // Wall time of the tessellation and the Embree build, milliseconds.
   double build_ms() const;
@@ -268,6 +282,7 @@ struct MethodComparison {
 
 struct Comparison {
   size_t reference_triangles = 0;
+  size_t reference_patches = 0;
   double reference_max_edge_texels = 0;
   double reference_build_ms = 0;
   double reference_ms = 0;  // ray tracing the uv frame (the lit frame takes as long)
