@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -92,6 +93,29 @@ TEST(Progressive, LevelsEqualDirectReductionWithTheFastPreset) {
   w.columns = 48;
   w.rows = 24;
   check_levels(make_brick_wall(w), 100, ReduceQuality::fast);
+}
+
+// best keeps one of two reductions: its record is the one kept, so the record's last level is
+// best's output. The torus at 100 faces keeps the area-weighted run, the wall at 60 the
+// uniform one (checked below, so that both branches are exercised).
+TEST(Progressive, BestRecordsTheReductionItKeeps) {
+  BrickWallOptions w;
+  w.columns = 48;
+  w.rows = 24;
+  const std::pair<Mesh, size_t> cases[] = {{make_torus(48, 24), 100}, {make_brick_wall(w), 60}};
+  std::set<std::string> kept;
+  for (const auto& [in, target] : cases) {
+    ReduceOptions o;
+    o.target_faces = target;
+    o.quality = ReduceQuality::best;
+    ProgressiveMesh pm;
+    ReduceReport r;
+    const Mesh out = reduce_mesh(in, o, &r, null_progress(), &pm);
+    expect_same_mesh(progressive_level(pm, out.n_faces()), out, "last level, planes " + r.planes);
+    expect_same_mesh(reduce_mesh(in, o), out, "with and without the record");
+    kept.insert(r.planes);
+  }
+  EXPECT_EQ(kept, (std::set<std::string>{"area", "uniform"}));
 }
 
 // Relief, a boundary (collapses that close boundary triangles move boundary halfedges into
