@@ -28,7 +28,10 @@
 # XATLAS_BRUTE=0 skips the brute-force variants (slow at 1024).
 #
 # Environment: MESO, MESO_EXAMPLE (binaries), OUT (work directory, default /tmp/uvpack_peers),
-# SIZES, PADDINGS, QUALITIES (lists; meso's --quality presets), XATLAS_BRUTE.
+# SIZES, PADDINGS, QUALITIES (lists; meso's --quality presets), XATLAS_BRUTE, CLAMP (1: also
+# meso balanced --clamp, charts allowed to touch the atlas border as xatlas's are; 0: not).
+# meso's default (--wrap) keeps ceil(P/2) texels to the border so that the atlas can be sampled
+# with repeat addressing; xatlas keeps none, so its atlases are right for clamp-to-edge only.
 set -euo pipefail
 
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -39,6 +42,7 @@ SIZES=${SIZES:-"512 1024"}
 PADDINGS=${PADDINGS:-"2 4"}
 XATLAS_BRUTE=${XATLAS_BRUTE:-1}
 QUALITIES=${QUALITIES:-"fast balanced best"}
+CLAMP=${CLAMP:-1}
 PEERS=$ROOT/bench/uvpack_peers
 
 for b in "$MESO" "$MESO_EXAMPLE"; do
@@ -103,6 +107,19 @@ for input in $INPUTS; do
           record "$input" "$size" "$pad" meso "$quality" 0 true "$prefix"
         fi
       done
+      # meso balanced with --clamp (no border margin): xatlas packs up to the atlas border,
+      # which is right for clamp-to-edge sampling only, so this is the like-for-like row
+      if [[ $CLAMP == 1 ]]; then
+        prefix=$OUT/$tag.meso-clamp
+        t0=$(now_ms)
+        if "$MESO" --json --quiet uvpack pack "$OUT/$input.obj" -o "$prefix.obj" --size "$size" --padding "$pad" --clamp >"$prefix.pack.json"; then
+          t1=$(now_ms)
+          verify "$input" "$size" "$pad" "$prefix"
+          record "$input" "$size" "$pad" meso "balanced --clamp" $((t1 - t0)) false "$prefix"
+        else
+          record "$input" "$size" "$pad" meso "balanced --clamp" 0 true "$prefix"
+        fi
+      fi
       # xatlas variants
       half=$(( (pad + 1) / 2 ))
       variants=("P, bilinear, random, axis|--padding $pad --bilinear 1 --axis" "P, bilinear, random|--padding $pad --bilinear 1")

@@ -80,6 +80,15 @@ TEST(Cli, UvpackPackMakesAUniqueMappingWithPadding) {
   const Result quarter = run("uvpack pack " + (dir / "cube.obj").string() + " -o " + (dir / "quarter.obj").string() + " --size 128 --padding 3 --quarter-turns --json");
   ASSERT_EQ(quarter.code, 0) << quarter.err;
   EXPECT_EQ(nlohmann::json::parse(quarter.out)["min_area_orientation"], false);
+  // Addressing: --wrap (the default) keeps ceil(3 / 2) = 2 texels to the border, --clamp none.
+  EXPECT_EQ(report["addressing"], "wrap");
+  EXPECT_EQ(report["border_margin"], 2);
+  const Result clamp = run("uvpack pack " + (dir / "cube.obj").string() + " -o " + (dir / "clamp.obj").string() + " --size 128 --padding 3 --clamp --json");
+  ASSERT_EQ(clamp.code, 0) << clamp.err;
+  EXPECT_EQ(nlohmann::json::parse(clamp.out)["addressing"], "clamp");
+  EXPECT_EQ(nlohmann::json::parse(clamp.out)["border_margin"], 0);
+  EXPECT_EQ(run("uvpack pack " + (dir / "cube.obj").string() + " -o " + (dir / "x.obj").string() + " --wrap --clamp").code, 2);
+  EXPECT_FALSE(fs::exists(dir / "x.obj"));
   // (A mesh without UVs is unwrapped first: Cli.UvpackPackUnwrapsAMeshWithoutUvs.)
 }
 

@@ -156,6 +156,7 @@ void add_uvpack(CLI::App& app, Context& ctx) {
     UvPackOptions options;
     bool no_rotate = false;
     bool quarter_turns = false;
+    bool clamp = false;
     bool unwrap = false;
     std::string unwrap_method = "lscm";
     UvUnwrapOptions unwrap_options;
@@ -168,7 +169,11 @@ void add_uvpack(CLI::App& app, Context& ctx) {
   pack->add_option("input", pack_args->input, "Mesh (its UV charts are kept as they are, unless --unwrap or it has no UVs)")->required();
   pack->add_option("-o,--output", pack_args->output, "Output mesh (.obj, .ply, .gltf, .glb)")->required();
   pack->add_option("--size", pack_args->options.size, "Atlas size in texels per side")->check(CLI::Range(1, 16384))->capture_default_str();
-  pack->add_option("--padding", pack_args->options.padding, "Texels between charts (half of it to the border)")->check(CLI::Range(0, 256))->capture_default_str();
+  pack->add_option("--padding", pack_args->options.padding, "Texels between charts (and half of it, rounded up, to the border unless --clamp)")->check(CLI::Range(0, 256))->capture_default_str();
+  auto* pack_wrap = pack->add_flag("--wrap", "The atlas is sampled with repeat addressing: charts keep half the padding (rounded up) "
+                                               "to its border, so that they are the padding apart across the wrap (the default)");
+  pack->add_flag("--clamp", pack_args->clamp, "The atlas is sampled with clamp-to-edge addressing: charts may touch its border")
+      ->excludes(pack_wrap);
   pack->add_flag("--no-rotate", pack_args->no_rotate, "Keep every chart's orientation");
   pack->add_flag("--quarter-turns", pack_args->quarter_turns,
                  "Turn charts by multiples of 90 degrees of their input orientation only (by default each chart's minimum-area "
@@ -235,7 +240,8 @@ void add_uvpack(CLI::App& app, Context& ctx) {
       }
       if (o.mip_safe >= 0 && o.size % (1 << o.mip_safe) != 0)
         throw UsageError("--mip-safe " + std::to_string(o.mip_safe) + " needs --size to be a multiple of " + std::to_string(1 << o.mip_safe));
-      if (2 * ((o.padding + 1) / 2) >= o.size)
+      o.wrap = !pack_args->clamp;
+      if (2 * atlas_border_margin(o) >= o.size)
         throw UsageError("--padding " + std::to_string(o.padding) + " leaves no texel inside a " + std::to_string(o.size) + "-texel atlas");
       UvPackReport r;
       const auto pack_start = std::chrono::steady_clock::now();
@@ -261,6 +267,8 @@ void add_uvpack(CLI::App& app, Context& ctx) {
                 {"output", pack_args->output},
                 {"size", o.size},
                 {"padding", o.padding},
+                {"addressing", o.wrap ? "wrap" : "clamp"},
+                {"border_margin", atlas_border_margin(o)},
                 {"rotate", o.rotate},
                 {"min_area_orientation", o.rotate && o.min_area_orientation},
                 {"quality", pack_args->quality},

@@ -44,8 +44,11 @@ const coverage = (r) => (r && !r.failed ? r.check.texel_coverage : NaN);
 const main = variants[0];
 const lines = [];
 lines.push(`### meso uvpack pack (--quality ${mesoMain}) vs xatlas (${main})`, '');
-lines.push('| input | charts | size | padding | meso utilization (texel coverage) | meso time (packings) | xatlas utilization (texel coverage) | xatlas time (packings; one packing) | utilization ratio meso / xatlas | meso check | xatlas check |');
-lines.push('|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---|');
+// meso --clamp: no border margin, as xatlas (whose atlases are right for clamp-to-edge sampling only).
+const clampVariant = 'balanced --clamp';
+const hasClamp = qualities.includes(clampVariant);
+lines.push(`| input | charts | size | padding | meso utilization (texel coverage) | meso time (packings) | xatlas utilization (texel coverage) | xatlas time (packings; one packing) | utilization ratio meso / xatlas |${hasClamp ? ' meso --clamp utilization | ratio meso --clamp / xatlas |' : ''} meso check | xatlas check |`);
+lines.push(`|---|---:|---:|---:|---:|---:|---:|---:|---:|${hasClamp ? '---:|---:|' : ''}---|---|`);
 for (const input of inputs)
   for (const size of [...new Set(runs.filter((r) => r.input === input).map((r) => r.size))])
     for (const padding of [...new Set(runs.filter((r) => r.input === input && r.size === size).map((r) => r.padding))]) {
@@ -54,7 +57,9 @@ for (const input of inputs)
       const charts = m?.charts ?? x?.charts;
       const mt = m && !m.failed ? `${secs(m.wall_ms)} (${m.pack.attempts})` : '-';
       const xt = x && !x.failed ? `${secs(x.wall_ms)} (${x.pack.attempts}; ${secs(x.pack.ms.final_pack)})` : '-';
-      lines.push(`| ${input} | ${charts} | ${size} | ${padding} | ${pct(util(m))} (${pct(coverage(m))}) | ${mt} | ${pct(util(x))} (${pct(coverage(x))}) | ${xt} | ${(util(m) / util(x)).toFixed(3)} | ${verdict(m, charts)} | ${verdict(x, charts)} |`);
+      const k = hasClamp ? find(input, size, padding, 'meso', clampVariant) : null;
+      const kc = hasClamp ? ` ${pct(util(k))}${verdict(k, charts) === 'clean' ? '' : ' **' + verdict(k, charts) + '**'} | ${(util(k) / util(x)).toFixed(3)} |` : '';
+      lines.push(`| ${input} | ${charts} | ${size} | ${padding} | ${pct(util(m))} (${pct(coverage(m))}) | ${mt} | ${pct(util(x))} (${pct(coverage(x))}) | ${xt} | ${(util(m) / util(x)).toFixed(3)} |${kc} ${verdict(m, charts)} | ${verdict(x, charts)} |`);
     }
 
 lines.push('', '### meso\'s quality presets (utilization / texel coverage / wall time (packings))', '');

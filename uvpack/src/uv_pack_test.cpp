@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -237,6 +239,67 @@ TEST(UvPack, MinimumAreaOrientationStraightensTurnedCharts) {
     // (quarter turns, one order) reached 73.0 % at 512^2 and 77.0 % at 1024^2 here.
     EXPECT_GE(utilization[1], 0.80);
     EXPECT_GT(utilization[1], utilization[0]) << "straightened charts pack tighter";
+  }
+}
+
+// The texel columns and rows the charts touch (conservatively: a UV corner exactly on a texel
+// edge does not count the texel beyond it), as [x0, x1) x [y0, y1).
+std::array<int, 4> touched_box(const Mesh& m, int size) {
+  double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
+  for (auto h : m.halfedges()) {
+    if (m.is_boundary(h)) continue;
+    const Vec2f uv = m.texcoord2D(h);
+    for (int k = 0; k < 2; ++k) lo[k] = std::min(lo[k], static_cast<double>(uv[k]) * size), hi[k] = std::max(hi[k], static_cast<double>(uv[k]) * size);
+  }
+  constexpr double kFloatSlack = 1e-3;  // float UVs of integer texel offsets
+  return {static_cast<int>(std::floor(lo[0] + kFloatSlack)), static_cast<int>(std::ceil(hi[0] - kFloatSlack)),
+          static_cast<int>(std::floor(lo[1] + kFloatSlack)), static_cast<int>(std::ceil(hi[1] - kFloatSlack))};
+}
+
+// With repeat addressing (wrap, the default) charts keep ceil(padding / 2) texels from every
+// side, so that charts at opposite sides are `padding` apart across the wrap; with clamp they
+// may touch the border, and a chart that fills the atlas gets the texels the margin held.
+TEST(UvPack, BorderMarginFollowsTheAddressing) {
+  for (const int padding : {1, 2, 3, 4}) {
+    const Mesh square = test::make_uv_quads({{0, 0, 1, 1}});
+    for (const Mesh& input : {square, scattered_quads(30, 7)}) {
+      Mesh wrapped = input, clamped = input;
+      UvPackOptions o;
+      o.size = 128;
+      o.padding = padding;
+      const UvPackReport rw = pack_uv_charts(wrapped, o);
+      o.wrap = false;
+      EXPECT_EQ(atlas_border_margin(o), 0);
+      const UvPackReport rc = pack_uv_charts(clamped, o);
+      const int margin = (padding + 1) / 2;
+      const auto bw = touched_box(wrapped, o.size), bc = touched_box(clamped, o.size);
+      EXPECT_GE(bw[0], margin) << padding;
+      EXPECT_LE(bw[1], o.size - margin) << padding;
+      EXPECT_GE(bw[2], margin) << padding;
+      EXPECT_LE(bw[3], o.size - margin) << padding;
+      EXPECT_GE(std::min(bc[0], bc[2]), 0);
+      EXPECT_LE(std::max(bc[1], bc[3]), o.size);
+      for (const Mesh* m : {&wrapped, &clamped}) {
+        const UvCheckReport c = check_packed(*m, o.size, padding);
+        EXPECT_TRUE(c.shared_texel_faces.empty());
+        EXPECT_TRUE(c.padding_violations.empty());
+        EXPECT_TRUE(c.outside_faces.empty());
+      }
+      if (input.n_faces() == 2) {
+        // One square chart: it spans the atlas less the two margins, or the whole atlas.
+        EXPECT_EQ(bw[0], margin);
+        EXPECT_EQ(bw[1], o.size - margin);
+        EXPECT_EQ(bc[0], 0);
+        EXPECT_EQ(bc[1], o.size);
+        const double side = static_cast<double>(o.size - 2 * margin) / o.size;
+        // The scale search stops within its tolerance (balanced: 1 %, refined by the variants)
+        // of the largest scale that fits, so the area is a little short of the span's.
+        EXPECT_NEAR(rw.utilization, side * side, 5e-3) << padding;
+        EXPECT_NEAR(rc.utilization, 1.0, 5e-3) << padding;
+      } else {
+        EXPECT_GE(rc.utilization, rw.utilization * 0.99) << "clamp has more room (the greedy packing is not monotone)";
+      }
+    }
   }
 }
 

@@ -19,7 +19,13 @@ enum class PackQuality { fast, balanced, best };
 
 struct UvPackOptions {
   int size = 1024;     // texels per side of the atlas
-  int padding = 2;     // texels kept between charts (and to the atlas border: half of it)
+  int padding = 2;     // texels kept between charts (and to the atlas border: see wrap)
+  // How the atlas will be sampled at its border. true (repeat, GL_REPEAT, glTF's default):
+  // every chart keeps ceil(padding / 2) texels from the border, so that charts at opposite
+  // borders are at least `padding` apart across the wrap. false (clamp-to-edge): a lookup
+  // past the border reads the border texel itself, so charts may touch the border (xatlas
+  // packs this way, whatever the sampler).
+  bool wrap = true;
   bool rotate = true;  // try quarter turns per chart (how many: quality)
   // With rotate: also try the quarter turns of each chart's minimum-area orientation (the turn
   // that makes its bounding box smallest), when that box is 1-10 % smaller than the input's, or
@@ -48,7 +54,8 @@ struct UvPackReport {
 // integer texel offsets. Guarantees,
 // at options.size: no texel is touched (conservatively: the triangle meets its square) by
 // two charts, and touched texels of different charts are at least `padding` texels apart
-// (Chebyshev, hence also Euclidean) and at least padding / 2 from the atlas border. The
+// (Chebyshev, hence also Euclidean) and, with wrap, at least ceil(padding / 2) from the atlas
+// border (atlas_border_margin), so also `padding` apart across it. The
 // scale is one at which the greedy placement succeeds, within the quality's tolerance of one at
 // which it fails (each packing's fill aims the next: 4-6 packings where bisection took 9), or a
 // larger one at which a variant succeeds (PackQuality). Charts with
@@ -67,5 +74,8 @@ struct UvPackReport {
 // costs about 4 * 2^K texels between charts. Anisotropic filtering reads farther and is not covered. Requires UVs; throws InputError-free
 // std::invalid_argument when the charts cannot fit even at the smallest scale tried.
 UvPackReport pack_uv_charts(Mesh& mesh, const UvPackOptions& options);
+
+// The texels every chart keeps free along each side of the atlas (UvPackOptions::wrap).
+inline int atlas_border_margin(const UvPackOptions& o) { return o.wrap ? (o.padding > 0 ? (o.padding + 1) / 2 : 0) : 0; }
 
 }  // namespace meso
