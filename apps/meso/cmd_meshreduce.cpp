@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <optional>
 
 namespace meso::cli {
 
@@ -37,8 +38,10 @@ ErrorTarget parse_error(const std::string& text, const char* option = "--error")
   return t;
 }
 
-void add_distance(nlohmann::json& report, Globals& g, const Mesh& input, const Mesh& out, double diagonal) {
-  const SurfaceDistance d = measure_surface_distance(input, out);
+// `measured`: the distance reduce_mesh already measured (--quality best), else measured here.
+void add_distance(nlohmann::json& report, Globals& g, const Mesh& input, const Mesh& out, double diagonal,
+                  const std::optional<SurfaceDistance>& measured) {
+  const SurfaceDistance d = measured ? *measured : measure_surface_distance(input, out);
   const double pct = diagonal > 0 ? 100.0 / diagonal : 0.0;
   report["error"] = {{"hausdorff", d.hausdorff},
                      {"hausdorff_percent", d.hausdorff * pct},
@@ -191,7 +194,7 @@ void add_meshreduce(CLI::App& app, Context& ctx) {
           const Mesh input = progressive_base_input(pm);
           const double diagonal = bounding_box(input).diagonal();
           report["bounding_box_diagonal"] = diagonal;
-          add_distance(report, ctx.globals, input, out, diagonal);
+          add_distance(report, ctx.globals, input, out, diagonal, std::nullopt);
         }
         return 0;
       };
@@ -260,7 +263,7 @@ void add_meshreduce(CLI::App& app, Context& ctx) {
         report["target_error"] = o.max_error;
         report["tracked_error"] = r.tracked_error;
       }
-      if (!args->no_measure) add_distance(report, ctx.globals, input, out, diagonal);
+      if (!args->no_measure) add_distance(report, ctx.globals, input, out, diagonal, r.distance);
       if (!args->regions.empty())
         add_regions(report, ctx.globals, input, out, regions_target.percent ? regions_target.value * 0.01 * diagonal : regions_target.value, diagonal);
       else if (by_error)

@@ -5,6 +5,8 @@
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
+#include <tbb/parallel_invoke.h>
 
 #include <algorithm>
 #include <array>
@@ -668,6 +670,18 @@ TEST(MeshReduce, BestKeepsTheNearerOfTwoWeightings) {
   EXPECT_EQ(same_bytes(balanced, best), r.planes == "area");
   EXPECT_LE(best.n_faces(), 300u);
   EXPECT_NE(area, uniform) << "the two weightings should give different meshes";
+  // The kept output's distance comes with the report, as measure_surface_distance gives it.
+  ASSERT_TRUE(r.distance.has_value());
+  const SurfaceDistance again = measure_surface_distance(high, best);
+  EXPECT_EQ(r.distance->hausdorff, again.hausdorff);
+  EXPECT_EQ(r.distance->rms, again.rms);
+  EXPECT_EQ(r.distance->forward, again.forward);
+  EXPECT_EQ(r.distance->samples_b, again.samples_b);
+  // The two runs and the measure are parallel tasks: one thread gives the same bytes.
+  tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+  ReduceReport r1;
+  EXPECT_TRUE(same_bytes(best, reduce_mesh(high, o, &r1)));
+  EXPECT_EQ(r1.candidate_hausdorff, r.candidate_hausdorff);
 }
 
 // fast trades error for evaluations: on the sphere and on the bricks its Hausdorff distance
@@ -756,6 +770,31 @@ TEST(SurfaceDistance, KnownDistances) {
   EXPECT_NEAR(h.backward, 0.0, 1e-6);
   EXPECT_NEAR(h.hausdorff, 0.5, 1e-6);
   EXPECT_EQ(measure(a, half).rms, h.rms) << "deterministic";
+}
+
+// One reference, several meshes measured against it (concurrently, too): the same figures as
+// measure_surface_distance, for a smaller b (a's samples made once) and a larger one (a
+// sampled again, since the sample count depends on both).
+TEST(SurfaceDistance, ReferenceMeasuresAsTheFunctionDoes) {
+  const Mesh a = test::make_grid(40, 40);
+  Mesh coarse = test::make_grid(5, 5), fine = test::make_grid(170, 170);  // 57,800 faces: 115,600 samples, a alone asks for 100,000
+  for (auto v : coarse.vertices()) coarse.set_point(v, coarse.point(v) + Vec3f(0, 0, 0.01f * coarse.point(v)[0]));
+  for (auto v : fine.vertices()) fine.set_point(v, fine.point(v) + Vec3f(0, 0, 0.02f * std::sin(9.0f * fine.point(v)[1])));
+  const SurfaceDistanceReference reference(a);
+  SurfaceDistance got[2];
+  tbb::parallel_invoke([&] { got[0] = reference.measure(coarse); }, [&] { got[1] = reference.measure(fine); });
+  const Mesh* bs[2] = {&coarse, &fine};
+  for (int k = 0; k < 2; ++k) {
+    const SurfaceDistance want = measure_surface_distance(a, *bs[k]);
+    EXPECT_GT(want.hausdorff, 0.0);
+    EXPECT_EQ(got[k].forward, want.forward) << k;
+    EXPECT_EQ(got[k].backward, want.backward) << k;
+    EXPECT_EQ(got[k].hausdorff, want.hausdorff) << k;
+    EXPECT_EQ(got[k].rms, want.rms) << k;
+    EXPECT_EQ(got[k].samples_a, want.samples_a) << k;
+    EXPECT_EQ(got[k].samples_b, want.samples_b) << k;
+  }
+  EXPECT_GT(got[1].samples_a, got[0].samples_a) << "the larger b asks for more samples of a";
 }
 
 }  // namespace

@@ -121,18 +121,60 @@ SurfaceDistance measure_surface_distance(const Mesh& a, const Mesh& b, const Sur
   return measure_surface_distance(triangle_soup(a), triangle_soup(b), options);
 }
 
-SurfaceDistance measure_surface_distance(const TriangleSoup& a, const TriangleSoup& b, const SurfaceDistanceOptions& options) {
+namespace {
+
+// Samples on the faces of each mesh besides its vertices (SurfaceDistanceOptions::samples).
+size_t sample_count(const SurfaceDistanceOptions& options, size_t faces_a, size_t faces_b) {
+  return options.samples ? options.samples : std::clamp<size_t>(2 * std::max(faces_a, faces_b), 100000, 4000000);
+}
+
+}  // namespace
+
+struct SurfaceDistanceReference::Impl {
+  SurfaceDistanceOptions options;
+  TriangleSoup soup;  // a, to sample again for a b with more faces (the count depends on both)
+  std::vector<Triangle> triangles;
+  Tree tree;
+  size_t samples_n = 0;  // a's samples for any b with at most as many faces as a
+  std::vector<Point> samples;
+};
+
+SurfaceDistanceReference::SurfaceDistanceReference(const TriangleSoup& a, const SurfaceDistanceOptions& options)
+    : impl_(std::make_unique<Impl>()) {
+  Impl& r = *impl_;
+  r.options = options;
+  r.soup = a;
+  r.triangles = triangles(a);
+  r.samples_n = sample_count(options, a.triangles.size(), a.triangles.size());
+  r.samples = sample(a, r.triangles, r.samples_n, options.seed);
+  r.tree.insert(r.triangles.begin(), r.triangles.end());
+  if (!r.triangles.empty()) {
+    r.tree.build();  // now rather than on the first query: measure() is const and may run concurrently
+    r.tree.accelerate_distance_queries();
+  }
+}
+
+SurfaceDistanceReference::SurfaceDistanceReference(const Mesh& a, const SurfaceDistanceOptions& options)
+    : SurfaceDistanceReference(triangle_soup(a), options) {}
+
+SurfaceDistanceReference::~SurfaceDistanceReference() = default;
+
+SurfaceDistance SurfaceDistanceReference::measure(const Mesh& b) const { return measure(triangle_soup(b)); }
+
+SurfaceDistance SurfaceDistanceReference::measure(const TriangleSoup& b) const {
   const auto t0 = std::chrono::steady_clock::now();
-  const size_t n = options.samples ? options.samples
-                                   : std::clamp<size_t>(2 * std::max(a.triangles.size(), b.triangles.size()), 100000, 4000000);
-  const std::vector<Triangle> ta = triangles(a), tb = triangles(b);
-  const std::vector<Point> sa = sample(a, ta, n, options.seed), sb = sample(b, tb, n, options.seed + 1);
-  Tree tree_a(ta.begin(), ta.end()), tree_b(tb.begin(), tb.end());
-  if (!ta.empty()) tree_a.accelerate_distance_queries();
+  const Impl& r = *impl_;
+  const size_t n = sample_count(r.options, r.soup.triangles.size(), b.triangles.size());
+  std::vector<Point> resampled;
+  if (n != r.samples_n) resampled = sample(r.soup, r.triangles, n, r.options.seed);
+  const std::vector<Point>& sa = n != r.samples_n ? resampled : r.samples;
+  const std::vector<Triangle> tb = triangles(b);
+  const std::vector<Point> sb = sample(b, tb, n, r.options.seed + 1);
+  Tree tree_b(tb.begin(), tb.end());
   if (!tb.empty()) tree_b.accelerate_distance_queries();
   SurfaceDistance d;
   distances(sa, tree_b, tb.empty(), d.forward, d.rms_forward);
-  distances(sb, tree_a, ta.empty(), d.backward, d.rms_backward);
+  distances(sb, r.tree, r.triangles.empty(), d.backward, d.rms_backward);
   d.hausdorff = std::max(d.forward, d.backward);
   d.samples_a = sa.size();
   d.samples_b = sb.size();
@@ -144,10 +186,16 @@ SurfaceDistance measure_surface_distance(const TriangleSoup& a, const TriangleSo
   return d;
 }
 
+SurfaceDistance measure_surface_distance(const TriangleSoup& a, const TriangleSoup& b, const SurfaceDistanceOptions& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  SurfaceDistance d = SurfaceDistanceReference(a, options).measure(b);
+  d.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return d;
+}
+
 std::vector<double> face_distances(const Mesh& a, const Mesh& b, const SurfaceDistanceOptions& options) {
   const TriangleSoup sa = triangle_soup(a), sb = triangle_soup(b);
-  const size_t n = options.samples ? options.samples
-                                   : std::clamp<size_t>(2 * std::max(sa.triangles.size(), sb.triangles.size()), 100000, 4000000);
+  const size_t n = sample_count(options, sa.triangles.size(), sb.triangles.size());
   const std::vector<Triangle> ta = triangles(sa);
   // b's triangles, the degenerate ones included (they keep distance 0), in face order.
   std::vector<Triangle> tb;

@@ -11,9 +11,11 @@
 
 #include "meso/core/mesh.hpp"
 #include "meso/core/progress.hpp"
+#include "meso/meshreduce/surface_distance.hpp"
 
 #include <cstddef>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -35,7 +37,8 @@ struct ProgressiveMesh;  // progressive.hpp
 //    scaled so that seam and boundary planes keep their balance), then the output with the
 //    lower two-sided Hausdorff distance to the input (measure_surface_distance; area wins
 //    ties). Neither weighting is better at every budget on the bench meshes (docs/
-//    benchmarks.md); best costs two reductions and two measurements. With `progressive`,
+//    benchmarks.md); best costs two reductions and two measurements, run as parallel tasks
+//    (TBB; the output does not depend on the thread count). With `progressive`,
 //    the record is the chosen run's: its levels equal that weighting's balanced reduction.
 enum class ReduceQuality { fast, balanced, best };
 
@@ -111,6 +114,9 @@ struct ReduceReport {
   // measured Hausdorff distance of each candidate (area, uniform), object units.
   std::string planes = "area";
   std::vector<double> candidate_hausdorff;
+  // With ReduceQuality::best: the kept output's measured distance to the input, the same
+  // as measure_surface_distance(input, output) would give (callers need not measure again).
+  std::optional<SurfaceDistance> distance;
 };
 
 // Returns the reduced mesh. Guarantees:

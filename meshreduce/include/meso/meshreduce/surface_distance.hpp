@@ -16,6 +16,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace meso {
@@ -46,6 +47,26 @@ TriangleSoup triangle_soup(const Mesh& mesh);  // live faces; points = the mesh'
 // results do not depend on the thread count.
 SurfaceDistance measure_surface_distance(const Mesh& a, const Mesh& b, const SurfaceDistanceOptions& options = {});
 SurfaceDistance measure_surface_distance(const TriangleSoup& a, const TriangleSoup& b, const SurfaceDistanceOptions& options = {});
+
+// The same measure with `a` fixed, for several b (meshreduce --quality best measures two
+// candidates against one input): a's triangles, AABB tree and samples are made once, in the
+// constructor. measure(b) returns exactly measure_surface_distance(a, b, options) (seconds
+// aside: the time of measure() alone). measure() may be called from several threads at once.
+class SurfaceDistanceReference {
+ public:
+  explicit SurfaceDistanceReference(const TriangleSoup& a, const SurfaceDistanceOptions& options = {});
+  explicit SurfaceDistanceReference(const Mesh& a, const SurfaceDistanceOptions& options = {});
+  ~SurfaceDistanceReference();
+  SurfaceDistanceReference(const SurfaceDistanceReference&) = delete;
+  SurfaceDistanceReference& operator=(const SurfaceDistanceReference&) = delete;
+
+  SurfaceDistance measure(const TriangleSoup& b) const;
+  SurfaceDistance measure(const Mesh& b) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 // The same measure located on the faces of `b` (typically the reduced output), in b's face
 // order: per face, the largest distance of the samples attributed to it, both ways: its own
