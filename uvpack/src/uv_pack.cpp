@@ -662,9 +662,21 @@ UvPackReport pack_uv_charts(Mesh& mesh, const UvPackOptions& o) {
   // least a quarter; the search stops when the bracket is within the tolerance.
   const double n = o.size;
   double ok = 0, fail = 0;
+  double fit_bound = 0;  // one chart: the largest scale its box fits at (no larger one packs)
   Attempt best;
   {
     double s = 0.7 * (total_area > 0 ? std::sqrt(n * n / total_area) : n);
+    if (count == 1 && total_area > 0) {
+      // One chart: the largest scale at which its box fits inside the border margin, where the
+      // footprint is bw = floor(w s + kInset) + 1 <= n - 2 margin texels wide (the square
+      // atlas makes it the box's longer side, in any quarter turn). The search below would
+      // stop up to its tolerance short of it; from here it succeeds at once.
+      double side = std::numeric_limits<double>::infinity();
+      for (int f = 0; f < charts[0].frame_count; ++f)
+        side = std::min(side, std::max(charts[0].frames[static_cast<size_t>(f)].w, charts[0].frames[static_cast<size_t>(f)].h));
+      const double room = n - 2.0 * atlas_border_margin(o) - kInset;
+      if (side > 0 && room > 0) s = room * (1 - 1e-9) / (side * charts[0].factor), fit_bound = s;
+    }
     for (int k = 0; k < 60; ++k) {
       ++report.attempts;
       Attempt a = place_all(charts, footprints_at(charts, s, turns), orders[0], false, o, turns);
@@ -673,6 +685,7 @@ UvPackReport pack_uv_charts(Mesh& mesh, const UvPackOptions& o) {
         ok = s;
         best = std::move(a);
         if (total_area == 0) break;  // no chart has UV area: any scale packs
+        if (s == fit_bound) break;   // one chart at the largest scale its box allows: done
       } else {
         fail = s;
       }
