@@ -9,8 +9,9 @@
 // interval of its block's four corner depths (eq. 1), widened by epsilon_1 = one pass-1 step
 // above (the stored sample may be that far above the crossing, section 4.2), at least
 // kDigEpsilon, and epsilon_2 = one step below, then searches it linearly with the same step height (section 5.1, eq. 2:
-// a fixed step, so a short interval takes few steps) and refines by bisection (5.2). The
-// budget u_iterations is the number of linear steps over the whole slab in either pass.
+// a fixed step, so a short interval takes few steps) and refines by one secant step. The
+// budget u_iterations is the number of linear steps over the whole slab in either pass at
+// grazing angles, adapted to the view as POM's (dig_steps).
 // Not a safe method: a feature between the corner rays that the corners all miss is missed.
 
 uniform int u_dig_pass;     // 1: the grid, 2: the image
@@ -25,10 +26,19 @@ const float kDigEpsilon = 0.1;
 // Object length s along the view ray at which it has normalised depth z.
 float dig_s(vec3 dir, float z) { return mix(u_h_min, u_h_max, z) / dir.z; }
 
+// Linear-search steps over the whole slab, both passes: the budget at grazing angles, a
+// quarter of it straight on, where a ray crosses few texels (POM's adaptation, section 4.4.2
+// of the survey; the paper's "adaptive linear search", section 5). The corner rays and the
+// pixel rays of a block look the same way, so both passes take the same step height.
+int dig_steps(vec3 dir) {
+  float budget = float(max(u_iterations, 1));
+  return max(1, int(round(mix(budget, max(0.25 * budget, 1.0), clamp(-dir.z, 0.0, 1.0)))));
+}
+
 // Pass 1: the steep-parallax linear search (4.3.1) over the whole slab; the normalised depth
 // of the last sample above the surface (1 when the first is already below).
 float dig_corner_depth(vec3 dir) {
-  int steps = max(u_iterations, 1);
+  int steps = dig_steps(dir);
   float z_above = 1.0;
   for (int i = 0; i <= steps; ++i) {
     float z = 1.0 - float(i) / float(steps);
@@ -52,33 +62,30 @@ float dig_trace(vec3 dir, out float amortised) {
     lo = min(lo, corner.r);
     hi = max(hi, corner.r);
   }
-  int steps = max(u_iterations, 1);
+  int steps = dig_steps(dir);
   float step = 1.0 / float(steps);
   // Silhouette blocks (a corner off the mesh) search the whole slab.
   float top = known ? min(1.0, hi + max(step, kDigEpsilon)) : 1.0;
   float bottom = known ? max(0.0, lo - step) : 0.0;
-  float z_prev = top;
   float s_prev = dig_s(dir, top);
-  if (dir.z * s_prev - height_at(v_uv + dir.xy * s_prev) <= 0.0) return s_prev;
+  float d_prev = dir.z * s_prev - height_at(v_uv + dir.xy * s_prev);  // ray height minus surface height
+  if (d_prev <= 0.0) return s_prev;
   // Fixed step height through the interval; if the crossing is not in it (the grid's
   // approximation failed), on to the slab's bottom, so a pixel is never left without a hit.
   int n = int(ceil((top - bottom) / step - 1e-4)) + int(ceil(bottom / step - 1e-4));
   for (int i = 1; i <= n; ++i) {
     float z = max(top - float(i) * step, 0.0);
     float s = dig_s(dir, z);
-    if (dir.z * s - height_at(v_uv + dir.xy * s) <= 0.0) {
-      // Bisection (5.2) until the bracket is under a quarter texel across (at most 8 halvings).
-      float above = s_prev, below = s;
-      vec2 texels = vec2(textureSize(u_height, 0));
-      for (int j = 0; j < kReliefBinarySteps && length(dir.xy * (below - above) * texels) > 0.25; ++j) {
-        float mid = 0.5 * (above + below);
-        if (dir.z * mid - height_at(v_uv + dir.xy * mid) <= 0.0) below = mid;
-        else above = mid;
-      }
-      return 0.5 * (above + below);
+    float d = dir.z * s - height_at(v_uv + dir.xy * s);
+    if (d <= 0.0) {
+      // The confined search is "any regular per-pixel algorithm" (paper, section 3); this
+      // one refines as POM does, by one secant step between the last two samples (survey
+      // 4.4.2), which costs no fetch, where the paper's relief mapping bisects (5.2).
+      float w = d_prev / max(d_prev - d, 1e-20);
+      return mix(s_prev, s, clamp(w, 0.0, 1.0));
     }
     s_prev = s;
-    z_prev = z;
+    d_prev = d;
   }
   return dig_s(dir, 0.0);
 }
