@@ -1,30 +1,29 @@
-// meshreduce's one CGAL translation unit (compile time): AABB-tree distance queries.
+// The surface distance: closest-point queries through an Embree BVH (rtcPointQuery), the
+// distances themselves in double precision.
 #include "meso/meshreduce/surface_distance.hpp"
 
-#include <CGAL/AABB_traits.h>
-#include <CGAL/AABB_tree.h>
-#include <CGAL/AABB_triangle_primitive.h>
-#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include "geometry.hpp"
 
+#include "meso/core/error.hpp"
+
+#include <embree3/rtcore.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <limits>
+#include <memory>
+#include <utility>
 #include <vector>
 
 namespace meso {
 
 namespace {
 
-using K = CGAL::Exact_predicates_inexact_constructions_kernel;
-using Point = K::Point_3;
-using Triangle = K::Triangle_3;
-using Iterator = std::vector<Triangle>::const_iterator;
-using Primitive = CGAL::AABB_triangle_primitive<K, Iterator>;
-using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
+using reduce::Vec3d;
 
 // splitmix64: a portable generator, so samples are the same on every platform.
 struct Random {
@@ -38,59 +37,183 @@ struct Random {
   double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
 };
 
-Point point(const Vec3f& p) { return Point(p[0], p[1], p[2]); }
+struct Triangle {
+  Vec3d a, b, c;
+  double area() const { return 0.5 * OpenMesh::cross(b - a, c - a).norm(); }
+  // Collinear corners (zero cross product): no area, no plane; left out of the measure.
+  bool degenerate() const { return OpenMesh::cross(b - a, c - a).sqrnorm() == 0; }
+};
+
+Vec3d point(const Vec3f& p) { return Vec3d(p[0], p[1], p[2]); }
+
+Triangle triangle(const TriangleSoup& m, const std::array<uint32_t, 3>& t) {
+  return Triangle{point(m.points[t[0]]), point(m.points[t[1]]), point(m.points[t[2]])};
+}
 
 std::vector<Triangle> triangles(const TriangleSoup& m) {
   std::vector<Triangle> out;
   out.reserve(m.triangles.size());
   for (const auto& t : m.triangles) {
-    const Triangle tri(point(m.points[t[0]]), point(m.points[t[1]]), point(m.points[t[2]]));
-    if (!tri.is_degenerate()) out.push_back(tri);
+    const Triangle tri = triangle(m, t);
+    if (!tri.degenerate()) out.push_back(tri);
   }
   return out;
 }
 
+// The nearest of a set of triangles to a point: an Embree BVH over them, queried with a
+// sphere that shrinks to each closer triangle found (rtcPointQuery). Embree tests boxes in
+// float, on corners stored relative to the set's centre; the sphere's radius is the exact
+// (double) distance found so far plus a slack of 1e-6 of the coordinates' magnitude, well
+// above the float rounding of the boxes and of the query point, so the nearest triangle is
+// never culled. The distance is Ericson's closest point (reduce::closest_point_sqr), and
+// ties go to the lowest index: the answer does not depend on the order Embree visits leaves.
+class ClosestTriangles {
+ public:
+  explicit ClosestTriangles(const std::vector<Triangle>& tris) : tris_(tris) {
+    if (tris.empty()) return;
+    Vec3d lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+    for (const Triangle& t : tris)
+      for (const Vec3d& p : {t.a, t.b, t.c}) lo.minimize(p), hi.maximize(p);
+    centre_ = (lo + hi) * 0.5;
+    extent_ = std::max((hi - lo).max_abs() * 0.5, std::numeric_limits<double>::min());
+    vertices_.resize(9 * tris.size() + 1, 0.0f);  // + 1: Embree reads 16 bytes at the last vertex
+    indices_.resize(3 * tris.size());
+    for (size_t i = 0; i < tris.size(); ++i) {
+      const Vec3d corners[3] = {tris[i].a, tris[i].b, tris[i].c};
+      for (size_t k = 0; k < 3; ++k) {
+        for (int j = 0; j < 3; ++j) vertices_[9 * i + 3 * k + static_cast<size_t>(j)] = static_cast<float>(corners[k][j] - centre_[j]);
+        indices_[3 * i + k] = static_cast<uint32_t>(3 * i + k);
+      }
+    }
+    device_ = rtcNewDevice(nullptr);
+    if (!device_) throw InternalError("Embree: cannot create a device");
+    scene_ = rtcNewScene(device_);
+    rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_MEDIUM);
+    RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
+    rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, vertices_.data(), 0, 3 * sizeof(float), 3 * tris.size());
+    rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, indices_.data(), 0, 3 * sizeof(uint32_t), tris.size());
+    rtcCommitGeometry(geom);
+    rtcAttachGeometry(scene_, geom);
+    rtcReleaseGeometry(geom);
+    rtcCommitScene(scene_);
+  }
+  ~ClosestTriangles() {
+    if (scene_) rtcReleaseScene(scene_);
+    if (device_) rtcReleaseDevice(device_);
+  }
+  ClosestTriangles(const ClosestTriangles&) = delete;
+  ClosestTriangles& operator=(const ClosestTriangles&) = delete;
+
+  bool empty() const { return tris_.empty(); }
+
+  // The squared distance from p to the nearest triangle and that triangle's index (infinity
+  // and -1 for an empty set). `hint`, a triangle likely to be near (e.g. the previous
+  // sample's nearest; -1: none), starts the search with its distance as the radius, which
+  // prunes from the first node on; the answer is the same with any hint. Thread-safe.
+  std::pair<double, int64_t> nearest(const Vec3d& p, int64_t hint = -1) const {
+    Query q{this, p, std::numeric_limits<double>::infinity(), -1, 0};
+    if (tris_.empty()) return {q.best2, q.best};
+    const Vec3d r = p - centre_;
+    q.slack = 1e-6 * std::max(extent_, r.max_abs());
+    float radius = std::numeric_limits<float>::infinity();
+    if (hint >= 0 && static_cast<size_t>(hint) < tris_.size()) {
+      const Triangle& t = tris_[static_cast<size_t>(hint)];
+      double w[3];
+      q.best2 = reduce::closest_point_sqr(p, t.a, t.b, t.c, w);
+      q.best = hint;
+      radius = q.radius(q.best2);
+    }
+    RTCPointQuery query;
+    query.x = static_cast<float>(r[0]);
+    query.y = static_cast<float>(r[1]);
+    query.z = static_cast<float>(r[2]);
+    query.time = 0.0f;
+    query.radius = radius;
+    RTCPointQueryContext context;
+    rtcInitPointQueryContext(&context);
+    rtcPointQuery(scene_, &query, &context, &ClosestTriangles::visit, &q);
+    return {q.best2, q.best};
+  }
+
+ private:
+  struct Query {
+    const ClosestTriangles* self;
+    Vec3d p;
+    double best2;
+    int64_t best;
+    double slack;
+    // The search radius for a squared distance d2: its root, plus 1e-6 of it and the slack.
+    float radius(double d2) const { return static_cast<float>(std::sqrt(d2) * (1 + 1e-6) + slack); }
+  };
+
+  static bool visit(RTCPointQueryFunctionArguments* args) {
+    Query& q = *static_cast<Query*>(args->userPtr);
+    const int64_t id = args->primID;
+    const Triangle& t = q.self->tris_[static_cast<size_t>(id)];
+    double w[3];
+    const double d2 = reduce::closest_point_sqr(q.p, t.a, t.b, t.c, w);
+    if (d2 > q.best2 || (d2 == q.best2 && id > q.best)) return false;
+    q.best2 = d2;
+    q.best = id;
+    const float radius = q.radius(d2);
+    if (!(radius < args->query->radius)) return false;
+    args->query->radius = radius;
+    return true;
+  }
+
+  const std::vector<Triangle>& tris_;
+  std::vector<float> vertices_;
+  std::vector<uint32_t> indices_;
+  Vec3d centre_{0, 0, 0};
+  double extent_ = 1;
+  RTCDevice device_ = nullptr;
+  RTCScene scene_ = nullptr;
+};
+
 // Every point used by a triangle, plus `n` points spread over the triangles by area.
-std::vector<Point> sample(const TriangleSoup& m, const std::vector<Triangle>& tris, size_t n, uint64_t seed) {
-  std::vector<Point> out;
+std::vector<Vec3d> sample(const TriangleSoup& m, const std::vector<Triangle>& tris, size_t n, uint64_t seed) {
+  std::vector<Vec3d> out;
   std::vector<char> used(m.points.size(), 0);
   for (const auto& t : m.triangles)
     for (const uint32_t i : t) used[i] = 1;
   for (size_t i = 0; i < m.points.size(); ++i)
     if (used[i]) out.push_back(point(m.points[i]));
   double total = 0;
-  for (const auto& t : tris) total += std::sqrt(t.squared_area());
+  for (const auto& t : tris) total += t.area();
   if (!(total > 0)) return out;
   out.reserve(out.size() + n + tris.size());
   Random rng{seed};
   for (const auto& t : tris) {
-    const double expected = static_cast<double>(n) * std::sqrt(t.squared_area()) / total;
+    const double expected = static_cast<double>(n) * t.area() / total;
     const size_t count = static_cast<size_t>(expected + rng.uniform());  // stochastic rounding
     for (size_t i = 0; i < count; ++i) {
       const double r1 = std::sqrt(rng.uniform()), r2 = rng.uniform();
-      const double wa = 1 - r1, wb = r1 * (1 - r2), wc = r1 * r2;
-      out.emplace_back(wa * t[0].x() + wb * t[1].x() + wc * t[2].x(), wa * t[0].y() + wb * t[1].y() + wc * t[2].y(),
-                       wa * t[0].z() + wb * t[1].z() + wc * t[2].z());
+      out.push_back(t.a * (1 - r1) + t.b * (r1 * (1 - r2)) + t.c * (r1 * r2));
     }
   }
   return out;
 }
 
 // Max and RMS of the distances from `points` to the triangles of `tree`.
-void distances(const std::vector<Point>& points, const Tree& tree, bool empty, double& max, double& rms) {
+void distances(const std::vector<Vec3d>& points, const ClosestTriangles& tree, double& max, double& rms) {
   if (points.empty()) {
     max = rms = 0;
     return;
   }
-  if (empty) {
+  if (tree.empty()) {
     max = rms = std::numeric_limits<double>::infinity();
     return;
   }
   std::vector<double> d2(points.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 2048), [&](const tbb::blocked_range<size_t>& r) {
-    // Each query on its own (the tree's own hint): a point's distance does not depend on
-    // how the range was split.
-    for (size_t i = r.begin(); i < r.end(); ++i) d2[i] = CGAL::to_double(tree.squared_distance(points[i]));
+    // Consecutive samples lie on one triangle or neighbours: the previous one's nearest
+    // triangle is a good first guess (ClosestTriangles::nearest).
+    int64_t hint = -1;
+    for (size_t i = r.begin(); i < r.end(); ++i) {
+      const auto [dd, id] = tree.nearest(points[i], hint);
+      d2[i] = dd;
+      hint = id;
+    }
   });
   // Sequential reduction: the same sum whatever the thread count.
   double m = 0, sum = 0;
@@ -134,9 +257,9 @@ struct SurfaceDistanceReference::Impl {
   SurfaceDistanceOptions options;
   TriangleSoup soup;  // a, to sample again for a b with more faces (the count depends on both)
   std::vector<Triangle> triangles;
-  Tree tree;
+  std::unique_ptr<ClosestTriangles> tree;  // over `triangles`
   size_t samples_n = 0;  // a's samples for any b with at most as many faces as a
-  std::vector<Point> samples;
+  std::vector<Vec3d> samples;
 };
 
 SurfaceDistanceReference::SurfaceDistanceReference(const TriangleSoup& a, const SurfaceDistanceOptions& options)
@@ -147,11 +270,7 @@ SurfaceDistanceReference::SurfaceDistanceReference(const TriangleSoup& a, const 
   r.triangles = triangles(a);
   r.samples_n = sample_count(options, a.triangles.size(), a.triangles.size());
   r.samples = sample(a, r.triangles, r.samples_n, options.seed);
-  r.tree.insert(r.triangles.begin(), r.triangles.end());
-  if (!r.triangles.empty()) {
-    r.tree.build();  // now rather than on the first query: measure() is const and may run concurrently
-    r.tree.accelerate_distance_queries();
-  }
+  r.tree = std::make_unique<ClosestTriangles>(r.triangles);  // built now: measure() is const and may run concurrently
 }
 
 SurfaceDistanceReference::SurfaceDistanceReference(const Mesh& a, const SurfaceDistanceOptions& options)
@@ -165,16 +284,15 @@ SurfaceDistance SurfaceDistanceReference::measure(const TriangleSoup& b) const {
   const auto t0 = std::chrono::steady_clock::now();
   const Impl& r = *impl_;
   const size_t n = sample_count(r.options, r.soup.triangles.size(), b.triangles.size());
-  std::vector<Point> resampled;
+  std::vector<Vec3d> resampled;
   if (n != r.samples_n) resampled = sample(r.soup, r.triangles, n, r.options.seed);
-  const std::vector<Point>& sa = n != r.samples_n ? resampled : r.samples;
+  const std::vector<Vec3d>& sa = n != r.samples_n ? resampled : r.samples;
   const std::vector<Triangle> tb = triangles(b);
-  const std::vector<Point> sb = sample(b, tb, n, r.options.seed + 1);
-  Tree tree_b(tb.begin(), tb.end());
-  if (!tb.empty()) tree_b.accelerate_distance_queries();
+  const std::vector<Vec3d> sb = sample(b, tb, n, r.options.seed + 1);
+  const ClosestTriangles tree_b(tb);
   SurfaceDistance d;
-  distances(sa, tree_b, tb.empty(), d.forward, d.rms_forward);
-  distances(sb, r.tree, r.triangles.empty(), d.backward, d.rms_backward);
+  distances(sa, tree_b, d.forward, d.rms_forward);
+  distances(sb, *r.tree, d.backward, d.rms_backward);
   d.hausdorff = std::max(d.forward, d.backward);
   d.samples_a = sa.size();
   d.samples_b = sb.size();
@@ -200,33 +318,32 @@ std::vector<double> face_distances(const Mesh& a, const Mesh& b, const SurfaceDi
   // b's triangles, the degenerate ones included (they keep distance 0), in face order.
   std::vector<Triangle> tb;
   tb.reserve(sb.triangles.size());
-  for (const auto& t : sb.triangles) tb.emplace_back(point(sb.points[t[0]]), point(sb.points[t[1]]), point(sb.points[t[2]]));
+  for (const auto& t : sb.triangles) tb.push_back(triangle(sb, t));
   std::vector<Triangle> tb_live;
   std::vector<size_t> live_face;
   for (size_t f = 0; f < tb.size(); ++f)
-    if (!tb[f].is_degenerate()) {
+    if (!tb[f].degenerate()) {
       tb_live.push_back(tb[f]);
       live_face.push_back(f);
     }
   std::vector<double> out(tb.size(), 0.0);
   if (ta.empty() || tb_live.empty()) return out;
-  Tree tree_a(ta.begin(), ta.end()), tree_b(tb_live.begin(), tb_live.end());
-  tree_a.accelerate_distance_queries();
-  tree_b.accelerate_distance_queries();
+  const ClosestTriangles tree_a(ta), tree_b(tb_live);
 
   // b's own samples, per face: corners, centroid, and points by area (fixed seed per face).
   double total = 0;
-  for (const auto& t : tb_live) total += std::sqrt(t.squared_area());
+  for (const auto& t : tb_live) total += t.area();
   tbb::parallel_for(tbb::blocked_range<size_t>(0, tb_live.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i < r.end(); ++i) {
       const Triangle& t = tb_live[i];
       Random rng{options.seed + 0x51ED2701ull * (live_face[i] + 1)};
-      const size_t count = static_cast<size_t>(static_cast<double>(n) * std::sqrt(t.squared_area()) / total + rng.uniform());
+      const size_t count = static_cast<size_t>(static_cast<double>(n) * t.area() / total + rng.uniform());
       double worst = 0;
+      int64_t hint = -1;  // the previous sample's nearest (ClosestTriangles::nearest)
       auto at = [&](double wa, double wb, double wc) {
-        const Point p(wa * t[0].x() + wb * t[1].x() + wc * t[2].x(), wa * t[0].y() + wb * t[1].y() + wc * t[2].y(),
-                      wa * t[0].z() + wb * t[1].z() + wc * t[2].z());
-        worst = std::max(worst, CGAL::to_double(tree_a.squared_distance(p)));
+        const auto [d2, id] = tree_a.nearest(t.a * wa + t.b * wb + t.c * wc, hint);
+        worst = std::max(worst, d2);
+        hint = id;
       };
       at(1, 0, 0);
       at(0, 1, 0);
@@ -240,12 +357,14 @@ std::vector<double> face_distances(const Mesh& a, const Mesh& b, const SurfaceDi
     }
   });
   // a's samples, attributed to the face of b nearest to them.
-  const std::vector<Point> pa = sample(sa, ta, n, options.seed);
+  const std::vector<Vec3d> pa = sample(sa, ta, n, options.seed);
   std::vector<std::pair<double, size_t>> nearest(pa.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, pa.size(), 2048), [&](const tbb::blocked_range<size_t>& r) {
+    int64_t hint = -1;
     for (size_t i = r.begin(); i < r.end(); ++i) {
-      const auto [q, id] = tree_b.closest_point_and_primitive(pa[i]);
-      nearest[i] = {std::sqrt(CGAL::to_double(CGAL::squared_distance(pa[i], q))), live_face[static_cast<size_t>(id - tb_live.cbegin())]};
+      const auto [d2, id] = tree_b.nearest(pa[i], hint);
+      nearest[i] = {std::sqrt(d2), live_face[static_cast<size_t>(id)]};
+      hint = id;
     }
   });
   for (const auto& [d, f] : nearest) out[f] = std::max(out[f], d);  // sequential: any thread count

@@ -4,8 +4,10 @@
 //
 // Each mesh is sampled at all its vertices plus `samples` points spread over its faces in
 // proportion to area (a fixed-seed generator: the same meshes give the same figures); each
-// sample's exact distance to the other mesh's triangles comes from a CGAL AABB tree
-// (closest-point queries on all non-degenerate triangles). forward = max over samples of
+// sample's distance to the other mesh's triangles is exact up to double rounding: the
+// nearest of all non-degenerate triangles, found through an Embree BVH (rtcPointQuery, a
+// conservative float search) and measured in double (closest point on a triangle, Ericson,
+// Real-Time Collision Detection 5.1.5). forward = max over samples of
 // `a` of their distance to `b`, backward = the reverse, hausdorff = max of both; the RMS
 // values are over the same samples. Like CGAL's approximate_Hausdorff_distance, the result
 // is a lower bound that converges to the true distance as samples grow.
