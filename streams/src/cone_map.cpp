@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 namespace meso {
@@ -584,6 +585,298 @@ float round_up_half(float v) {
   return static_cast<float>(h);
 }
 
+// The planes and gradient boxes of leaf texels, which the tree does not store (7 floats a
+// texel), computed when first needed and kept in a small direct-mapped cache per task: the
+// searches of neighbouring blocks open mostly the same leaves. The same functions of the
+// same grid values, so what is cached is what would be computed again.
+class LeafCache {
+ public:
+  explicit LeafCache(const HalfGrid& grid) : grid_(grid), entries_(kSide * kSide) {}
+  const float* plane(int x, int y) {
+    Entry& e = at(x, y);
+    if (!e.has_plane) texel_plane(grid_, x, y, e.plane.data());
+    e.has_plane = true;
+    return e.plane.data();
+  }
+  const float* box(int x, int y) {
+    Entry& e = at(x, y);
+    if (!e.has_box) texel_gradients(grid_, x, y, e.box.data());
+    e.has_box = true;
+    return e.box.data();
+  }
+
+ private:
+  static constexpr int kSide = 64;
+  struct Entry {
+    int x = -1, y = -1;
+    bool has_plane = false, has_box = false;
+    std::array<float, 3> plane{};
+    std::array<float, 4> box{};
+  };
+  Entry& at(int x, int y) {
+    Entry& e = entries_[static_cast<size_t>((y % kSide) * kSide + x % kSide)];
+    if (e.x != x || e.y != y) e = Entry{x, y};
+    return e;
+  }
+  const HalfGrid& grid_;
+  std::vector<Entry> entries_;
+};
+
+// Texels are searched kBlock x kBlock at a time: one walk of the quadtree serves the block,
+// each node carrying the set of the block's texels (a bit mask) for which it may still hold
+// a steeper point. What a per-texel search re-did for every texel (the descent from the
+// root, popping, sorting and pushing nodes, the children's rectangles and gaps) is done once
+// per block; the tests that decide (a node's maximum over its distance, its plane, its
+// gradient box, the pieces) stay per texel, so each texel's answer is still the exact
+// supremum of its own cone within the tolerance. A node far from the block is first tested
+// once for the whole block (union footprint F_B, lowest apex and lowest slope of the texels
+// still interested): S - T_p - psi_p dist(y, F_p) <= S - T_min - psi_min dist(y, F_B), so
+// where the block's test dismisses the node every texel's would.
+constexpr int kBlockLog = 2;
+constexpr int kBlock = 1 << kBlockLog;  // texel k of a block: column k % kBlock, row k / kBlock
+using Mask = uint32_t;
+static_assert(kBlock * kBlock <= 32, "one bit per texel of a block");
+
+struct Block {
+  int i0 = 0, j0 = 0, bw = 0, bh = 0;  // texels [i0, i0 + bw) x [j0, j0 + bh)
+  Rect f{};                            // the union of their footprints
+};
+
+inline int low_bit(Mask m) { return __builtin_ctz(m); }
+
+class BlockSearch {
+ public:
+  using PerTexel = std::array<double, kBlock * kBlock>;
+
+  BlockSearch(const MaxTree& tree, const HalfGrid& grid, int w, int h, bool wrap, double tolerance)
+      : tree_(tree), grid_(grid), w_(w), h_(h), wrap_(wrap), tol_(tolerance), root_(static_cast<int>(tree.level.size()) - 1),
+        global_max_(tree.at(root_, 0, 0)), leaves_(grid) {}
+
+  // Searches the texels of `todo` in block b (apex heights `top`), of one kind, each seeded
+  // with every point of `seeds`; texel k stops once its psi reaches cap[k] (the caller needs
+  // only min(cap, supremum)). The searches are left in s (indexed by k).
+  void run(const Block& b, const PerTexel& top, bool relaxed, Mask todo, const PerTexel& cap, const std::vector<ConeSearch::Point>& seeds,
+           std::vector<ConeSearch>& s) {
+    s.clear();
+    for (int k = 0; k < kBlock * kBlock; ++k) {
+      const int i = b.i0 + (k & (kBlock - 1)), j = b.j0 + (k >> kBlockLog);
+      footprint_[static_cast<size_t>(k)] = Rect{static_cast<double>(i), static_cast<double>(j), i + 1.0, j + 1.0};
+      s.emplace_back(footprint_[static_cast<size_t>(k)], top[static_cast<size_t>(k)], relaxed, tol_);
+    }
+    relaxed_ = relaxed;
+    live_ = 0;
+    for (Mask q = todo; q != 0; q &= q - 1) {
+      const size_t k = static_cast<size_t>(low_bit(q));
+      for (const ConeSearch::Point& p : seeds) s[k].seed(p);
+      if (s[k].psi < cap[k]) live_ |= Mask{1} << k;
+    }
+    visit(b, top, cap, s, 0, 0, live_);
+    if (wrap_) {
+      // Copies of the tile: none farther than (global max - T) / level can hold a steeper
+      // point. A texel with nothing higher in the tile has nothing higher in any copy.
+      Mask seen = 0;
+      double reach = 0;
+      for (Mask q = live_; q != 0; q &= q - 1) {
+        const size_t k = static_cast<size_t>(low_bit(q));
+        const double level = s[k].level();
+        if (level <= 0) continue;
+        seen |= Mask{1} << k;
+        reach = std::max(reach, (global_max_ - top[k]) / level);
+      }
+      if (seen != 0) {
+        const int ax = static_cast<int>(std::ceil(reach / w_)) + 1, ay = static_cast<int>(std::ceil(reach / h_)) + 1;
+        for (int bb = -ay; bb <= ay; ++bb)
+          for (int a = -ax; a <= ax; ++a)
+            if (a != 0 || bb != 0) visit(b, top, cap, s, static_cast<double>(a) * w_, static_cast<double>(bb) * h_, seen);
+      }
+    }
+  }
+
+ private:
+  struct Node {
+    int level, x, y;
+    float m;    // the node's maximum
+    Mask mask;  // the block's texels for which it may hold a steeper point
+    double d;   // distance to the block's footprint
+  };
+
+  // Under the cone of the slope found: nothing to gain. Under the cone of that slope
+  // widened by the tolerance: the node is dismissed and the widened slope kept as the
+  // bound (the stored cone may be that much narrower, never wider).
+  bool under(ConeSearch& s, const float* plane, const Rect& r, const Rect& f, double t) const {
+    if (plane_excess(plane, r, f, t, s.level()) <= 0) return true;
+    const double widened = s.psi * (1 + tol_);
+    if (widened > s.bound && plane_excess(plane, r, f, t, widened) <= 0) {
+      s.bound = std::max(s.bound, widened);
+      return true;
+    }
+    return false;
+  }
+
+  // The plane test of a node (or leaf) for the texels of `keep`; those apart from it
+  // (`apart`, d > 0; plane_excess needs r outside the footprint) may be dropped. First once
+  // for the whole block when the node is apart from all of it. Returns the texels left.
+  Mask planes(const float* plane, const Rect& r, double block_distance, const Block& b, const PerTexel& top, std::vector<ConeSearch>& s,
+              Mask keep, Mask apart, const PerTexel& level) {
+    if (apart == 0) return keep;
+    if (block_distance > 0 && (keep & (keep - 1)) != 0) {
+      double t_min = kInf, psi_min = kInf;
+      for (Mask q = keep; q != 0; q &= q - 1) {
+        const size_t k = static_cast<size_t>(low_bit(q));
+        t_min = std::min(t_min, top[k]);
+        psi_min = std::min(psi_min, level[k]);
+      }
+      if (plane_excess(plane, r, b.f, t_min, psi_min) <= 0) return 0;
+    }
+    for (Mask q = keep & apart; q != 0; q &= q - 1) {
+      const size_t k = static_cast<size_t>(low_bit(q));
+      if (under(s[k], plane, r, footprint_[k], top[k])) keep &= ~(Mask{1} << k);
+    }
+    return keep;
+  }
+
+  // Relaxed cones: drop the texels that see no point of r descend. Once for the block first
+  // (no point descends as seen from F_B: then from no F_p inside it either).
+  Mask rising(const float* box, const Rect& r, const Block& b, Mask keep) const {
+    if ((keep & (keep - 1)) != 0 && rises_away(box, r, b.f)) return 0;
+    for (Mask q = keep; q != 0; q &= q - 1) {
+      const size_t k = static_cast<size_t>(low_bit(q));
+      if (rises_away(box, r, footprint_[k])) keep &= ~(Mask{1} << k);
+    }
+    return keep;
+  }
+
+  // Depth-first over one copy of the map shifted by (ox, oy) pixels, nearest child (to the
+  // block) first.
+  void visit(const Block& b, const PerTexel& top, const PerTexel& cap, std::vector<ConeSearch>& s, double ox, double oy, Mask mask0) {
+    stack_.clear();
+    stack_.push_back({root_, 0, 0, static_cast<float>(global_max_), mask0, rect_distance(Rect{ox, oy, ox + w_, oy + h_}, b.f)});
+    std::array<double, kBlock> gx2{}, gy2{};
+    PerTexel level{}, level2{};
+    while (!stack_.empty() && live_ != 0) {
+      const Node n = stack_.back();
+      stack_.pop_back();
+      Mask keep = 0, apart = 0;
+      const double m = n.m;
+      const int size = 1 << n.level;
+      const Rect r{ox + static_cast<double>(n.x) * size, oy + static_cast<double>(n.y) * size,
+                   ox + std::min(static_cast<double>(n.x + 1) * size, static_cast<double>(w_)),
+                   oy + std::min(static_cast<double>(n.y + 1) * size, static_cast<double>(h_))};
+      // Squared gaps from each column and row of the block's texels to the node.
+      for (int c = 0; c < b.bw; ++c) {
+        const double gp = gap(b.i0 + c, b.i0 + c + 1.0, r.x0, r.x1);
+        gx2[static_cast<size_t>(c)] = gp * gp;
+      }
+      for (int c = 0; c < b.bh; ++c) {
+        const double gp = gap(b.j0 + c, b.j0 + c + 1.0, r.y0, r.y1);
+        gy2[static_cast<size_t>(c)] = gp * gp;
+      }
+      // A node no higher than the apex, or whose maximum over its nearest distance is no
+      // steeper than the slope already found (the value returned, level()), cannot change
+      // that texel's answer: (m - T) <= level d, squared (both sides >= 0).
+      for (Mask q = n.mask & live_; q != 0; q &= q - 1) {
+        const int k = low_bit(q);
+        const size_t uk = static_cast<size_t>(k);
+        const double e = m - top[uk];
+        if (e <= 0) continue;
+        const double d2 = gx2[static_cast<size_t>(k & (kBlock - 1))] + gy2[static_cast<size_t>(k >> kBlockLog)];
+        level[uk] = s[uk].level();
+        level2[uk] = level[uk] * level[uk];
+        if (d2 > 0) {
+          if (e * e <= level2[uk] * d2) continue;
+          apart |= Mask{1} << k;
+        }
+        keep |= Mask{1} << k;
+      }
+      if (keep == 0) continue;
+      if (n.level > 0) {
+        const size_t index = tree_.index(n.level, n.x, n.y);
+        keep = planes(&tree_.plane[static_cast<size_t>(n.level)][index * 3], r, n.d, b, top, s, keep, apart, level);
+        if (keep != 0 && relaxed_) keep = rising(&tree_.gradient[static_cast<size_t>(n.level)][index * 4], r, b, keep);
+        if (keep == 0) continue;
+      } else {
+        if (apart != 0) keep = planes(leaves_.plane(n.x, n.y), r, n.d, b, top, s, keep, apart, level);
+        if (keep != 0 && relaxed_) keep = rising(leaves_.box(n.x, n.y), r, b, keep);
+        if (keep == 0) continue;
+        std::array<Piece, 4> pieces = {piece(ox, oy, 2 * n.x, 2 * n.y), piece(ox, oy, 2 * n.x + 1, 2 * n.y), piece(ox, oy, 2 * n.x, 2 * n.y + 1),
+                                       piece(ox, oy, 2 * n.x + 1, 2 * n.y + 1)};
+        for (Mask q = keep; q != 0; q &= q - 1) {
+          const size_t k = static_cast<size_t>(low_bit(q));
+          for (const Piece& p : pieces) s[k].piece(p);
+          if (!(s[k].psi < cap[k])) live_ &= ~(Mask{1} << k);
+        }
+        continue;
+      }
+      // The children, each with the texels for which the test above would not skip it when
+      // popped (the level only grows until then, and the test is repeated there).
+      std::array<Node, 4> kids;
+      int count = 0;
+      const int l = n.level - 1;
+      const int cs = 1 << l, kw = tree_.w[static_cast<size_t>(l)], kh = tree_.h[static_cast<size_t>(l)];
+      const float* kid_max = tree_.level[static_cast<size_t>(l)].data();
+      const int cx0 = 2 * n.x, cx1 = std::min(2 * n.x + 1, kw - 1), cy0 = 2 * n.y, cy1 = std::min(2 * n.y + 1, kh - 1);
+      std::array<std::array<double, kBlock>, 2> kgx2{}, kgy2{};
+      std::array<double, 2> bgx{}, bgy{};  // gaps to the block's footprint
+      for (int cx = cx0; cx <= cx1; ++cx) {
+        const double x0 = ox + static_cast<double>(cx) * cs, x1 = ox + std::min(static_cast<double>(cx + 1) * cs, static_cast<double>(w_));
+        const size_t u = static_cast<size_t>(cx - cx0);
+        for (int c = 0; c < b.bw; ++c) {
+          const double gp = gap(b.i0 + c, b.i0 + c + 1.0, x0, x1);
+          kgx2[u][static_cast<size_t>(c)] = gp * gp;
+        }
+        bgx[u] = gap(b.f.x0, b.f.x1, x0, x1);
+      }
+      for (int cy = cy0; cy <= cy1; ++cy) {
+        const double y0 = oy + static_cast<double>(cy) * cs, y1 = oy + std::min(static_cast<double>(cy + 1) * cs, static_cast<double>(h_));
+        const size_t u = static_cast<size_t>(cy - cy0);
+        for (int c = 0; c < b.bh; ++c) {
+          const double gp = gap(b.j0 + c, b.j0 + c + 1.0, y0, y1);
+          kgy2[u][static_cast<size_t>(c)] = gp * gp;
+        }
+        bgy[u] = gap(b.f.y0, b.f.y1, y0, y1);
+      }
+      for (int cy = cy0; cy <= cy1; ++cy)
+        for (int cx = cx0; cx <= cx1; ++cx) {
+          const float km = kid_max[static_cast<size_t>(cy) * static_cast<size_t>(kw) + static_cast<size_t>(cx)];
+          const auto& ggx = kgx2[static_cast<size_t>(cx - cx0)];
+          const auto& ggy = kgy2[static_cast<size_t>(cy - cy0)];
+          Mask kid = 0;
+          for (Mask q = keep; q != 0; q &= q - 1) {
+            const int k = low_bit(q);
+            const double e = km - top[static_cast<size_t>(k)];
+            if (e <= 0) continue;
+            const double d2 = ggx[static_cast<size_t>(k & (kBlock - 1))] + ggy[static_cast<size_t>(k >> kBlockLog)];
+            if (d2 > 0 && e * e <= level2[static_cast<size_t>(k)] * d2) continue;
+            kid |= Mask{1} << k;
+          }
+          if (kid != 0) kids[static_cast<size_t>(count++)] = Node{l, cx, cy, km, kid, length(bgx[static_cast<size_t>(cx - cx0)], bgy[static_cast<size_t>(cy - cy0)])};
+        }
+      // Farthest pushed first, so the nearest is searched first (insertion sort of <= 4).
+      for (int a = 1; a < count; ++a)
+        for (int c = a; c > 0 && kids[static_cast<size_t>(c - 1)].d < kids[static_cast<size_t>(c)].d; --c)
+          std::swap(kids[static_cast<size_t>(c - 1)], kids[static_cast<size_t>(c)]);
+      for (int k = 0; k < count; ++k) stack_.push_back(kids[static_cast<size_t>(k)]);
+    }
+  }
+
+  Piece piece(double ox, double oy, int a, int b) const {
+    return Piece(ox + 0.5 * a, oy + 0.5 * b, grid_.at(a, b), grid_.at(a + 1, b), grid_.at(a, b + 1), grid_.at(a + 1, b + 1));
+  }
+
+  const MaxTree& tree_;
+  const HalfGrid& grid_;
+  int w_, h_;
+  bool wrap_;
+  double tol_;
+  int root_;
+  double global_max_;
+  LeafCache leaves_;
+  bool relaxed_ = false;
+  Mask live_ = 0;  // texels still searching (psi below their cap)
+  std::array<Rect, kBlock * kBlock> footprint_{};
+  std::vector<Node> stack_;
+};
+
 }  // namespace
 
 Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
@@ -592,166 +885,85 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
     for (float& v : field.height.pixels) v = static_cast<float>(Imath::half(v));
   const int w = field.height.width, h = field.height.height;
   const HalfGrid g = half_grid(field);
-  std::vector<float> top(static_cast<size_t>(w) * static_cast<size_t>(h));
+  std::vector<float> texel_top(static_cast<size_t>(w) * static_cast<size_t>(h));
   for (int j = 0; j < h; ++j)
     for (int i = 0; i < w; ++i) {
       float m = -1.0f;
       for (int b = 2 * j; b <= 2 * j + 2; ++b)
         for (int a = 2 * i; a <= 2 * i + 2; ++a) m = std::max(m, g.at(a, b));
-      top[static_cast<size_t>(j) * static_cast<size_t>(w) + static_cast<size_t>(i)] = m;
+      texel_top[static_cast<size_t>(j) * static_cast<size_t>(w) + static_cast<size_t>(i)] = m;
     }
-  const MaxTree tree = max_tree(std::move(top), g, w, h);
+  const MaxTree tree = max_tree(std::move(texel_top), g, w, h);
   const std::vector<float>& apex = tree.level[0];
-  const int root = static_cast<int>(tree.level.size()) - 1;
-  const double global_max = tree.at(root, 0, 0);
   const bool relaxed = o.kind == ConeKind::relaxed;
 
   Image out(w, h, 3);
-  tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {
-    struct Node {
-      int level, x, y;
-      float m;   // the node's maximum
-      double d;  // distance to the footprint, computed once when the node is pushed
-    };
-    std::vector<Node> stack;
-    // The planes and gradient boxes of leaf texels, which the tree does not store (7 floats
-    // a texel), computed when first needed and kept in a small direct-mapped cache: the
-    // searches of neighbouring texels open mostly the same leaves. The same functions of the
-    // same grid values, so what is cached is what would be computed again.
-    struct LeafBounds {
-      int x = -1, y = -1;
-      bool has_plane = false, has_box = false;
-      std::array<float, 3> plane{};
-      std::array<float, 4> box{};
-    };
-    constexpr int kCacheSide = 64;
-    std::vector<LeafBounds> leaf_cache(kCacheSide * kCacheSide);
-    auto leaf = [&](int x, int y) -> LeafBounds& {
-      LeafBounds& e = leaf_cache[static_cast<size_t>((y % kCacheSide) * kCacheSide + x % kCacheSide)];
-      if (e.x != x || e.y != y) e = LeafBounds{x, y};
-      return e;
-    };
-    for (int j = rows.begin(); j < rows.end(); ++j) {
-      // Seeds chain along a row only, so results never depend on how rows are split among
-      // threads.
-      ConeSearch::Point previous_conservative, previous_relaxed;
-      for (int i = 0; i < w; ++i) {
-        const double t = apex[static_cast<size_t>(j) * static_cast<size_t>(w) + static_cast<size_t>(i)];
-        const Rect f{static_cast<double>(i), static_cast<double>(j), i + 1.0, j + 1.0};
-        // One search: the supremum of the slope (relaxed: over points seen descending),
-        // seeded with the steepest point of the texel before it in this row. It stops once
-        // a slope of `cap` is attained: the caller only needs min(cap, supremum).
-        auto search_texel = [&](bool relaxed_kind, ConeSearch::Point& previous, double cap) {
-        ConeSearch search(f, t, relaxed_kind, o.tolerance);
-        search.seed(previous);
-        // Depth-first over one copy of the map shifted by (ox, oy) pixels, nearest child
-        // first; a node whose maximum cannot beat the slope attained so far is skipped.
-        auto visit = [&](double ox, double oy) {
-          stack.clear();
-          stack.push_back({root, 0, 0, static_cast<float>(global_max), rect_distance(Rect{ox, oy, ox + w, oy + h}, f)});
-          while (!stack.empty() && search.psi < cap) {
-            const Node n = stack.back();
-            stack.pop_back();
-            const double m = n.m;
-            if (m <= t) continue;
-            const int size = 1 << n.level;
-            const Rect r{ox + static_cast<double>(n.x) * size, oy + static_cast<double>(n.y) * size,
-                         ox + std::min(static_cast<double>(n.x + 1) * size, static_cast<double>(w)),
-                         oy + std::min(static_cast<double>(n.y + 1) * size, static_cast<double>(h))};
-            const double d = n.d;
-            if (d > 0 && (m - t) / d <= search.level()) continue;
-            // Under the cone of the slope found: nothing to gain. Under the cone of that slope
-            // widened by the tolerance: the node is dismissed and the widened slope kept as
-            // the bound (the stored cone may be that much narrower, never wider).
-            auto under = [&](const float* plane) {
-              if (plane_excess(plane, r, f, t, search.level()) <= 0) return true;
-              const double widened = search.psi * (1 + o.tolerance);
-              if (widened > search.bound && plane_excess(plane, r, f, t, widened) <= 0) {
-                search.bound = std::max(search.bound, widened);
-                return true;
-              }
-              return false;
-            };
-            if (d > 0 && n.level > 0 && under(&tree.plane[static_cast<size_t>(n.level)][tree.index(n.level, n.x, n.y) * 3])) continue;
-            if (relaxed_kind && n.level > 0 && rises_away(&tree.gradient[static_cast<size_t>(n.level)][tree.index(n.level, n.x, n.y) * 4], r, f))
-              continue;
-            if (n.level == 0) {
-              if (d > 0) {  // as for larger nodes, the plane is tested only apart from F
-                LeafBounds& e = leaf(n.x, n.y);
-                if (!e.has_plane) texel_plane(g, n.x, n.y, e.plane.data());
-                e.has_plane = true;
-                if (under(e.plane.data())) continue;
-              }
-              if (relaxed_kind) {
-                LeafBounds& e = leaf(n.x, n.y);
-                if (!e.has_box) texel_gradients(g, n.x, n.y, e.box.data());
-                e.has_box = true;
-                if (rises_away(e.box.data(), r, f)) continue;
-              }
-              for (int b = 2 * n.y; b <= 2 * n.y + 1; ++b)
-                for (int a = 2 * n.x; a <= 2 * n.x + 1; ++a)
-                  search.piece(Piece(ox + 0.5 * a, oy + 0.5 * b, g.at(a, b), g.at(a + 1, b), g.at(a, b + 1), g.at(a + 1, b + 1)));
-              continue;
-            }
-            std::array<Node, 4> kids;
-            int count = 0;
-            const int l = n.level - 1;
-            const int cs = 1 << l, kw = tree.w[static_cast<size_t>(l)], kh = tree.h[static_cast<size_t>(l)];
-            const float* kid_max = tree.level[static_cast<size_t>(l)].data();
-            // The children's gaps to F along each axis, shared by the children in a column or row.
-            const int cx0 = 2 * n.x, cx1 = std::min(2 * n.x + 1, kw - 1), cy0 = 2 * n.y, cy1 = std::min(2 * n.y + 1, kh - 1);
-            std::array<double, 2> gap_x{}, gap_y{};
-            for (int cx = cx0; cx <= cx1; ++cx)
-              gap_x[static_cast<size_t>(cx - cx0)] =
-                  gap(f.x0, f.x1, ox + static_cast<double>(cx) * cs, ox + std::min(static_cast<double>(cx + 1) * cs, static_cast<double>(w)));
-            for (int cy = cy0; cy <= cy1; ++cy)
-              gap_y[static_cast<size_t>(cy - cy0)] =
-                  gap(f.y0, f.y1, oy + static_cast<double>(cy) * cs, oy + std::min(static_cast<double>(cy + 1) * cs, static_cast<double>(h)));
-            for (int cy = cy0; cy <= cy1; ++cy)
-              for (int cx = cx0; cx <= cx1; ++cx) {
-                // A child that the two tests at the top of this loop would skip when popped is
-                // not pushed: neither test changes the search, and the level they compare
-                // against only grows until then. The sort below is stable, so the children
-                // pushed keep their order, and the search takes the same steps.
-                const float km = kid_max[static_cast<size_t>(cy) * static_cast<size_t>(kw) + static_cast<size_t>(cx)];
-                if (km <= t) continue;
-                const double kd = length(gap_x[static_cast<size_t>(cx - cx0)], gap_y[static_cast<size_t>(cy - cy0)]);  // as rect_distance
-                if (kd > 0 && (km - t) / kd <= search.level()) continue;
-                kids[static_cast<size_t>(count++)] = Node{l, cx, cy, km, kd};
-              }
-            // Farthest pushed first, so the nearest is searched first (insertion sort of <= 4).
-            for (int a = 1; a < count; ++a)
-              for (int b = a; b > 0 && kids[static_cast<size_t>(b - 1)].d < kids[static_cast<size_t>(b)].d; --b)
-                std::swap(kids[static_cast<size_t>(b - 1)], kids[static_cast<size_t>(b)]);
-            for (int k = 0; k < count; ++k) stack.push_back(kids[static_cast<size_t>(k)]);
+  const int blocks_x = (w + kBlock - 1) / kBlock, blocks_y = (h + kBlock - 1) / kBlock;
+  // Rows of blocks in parallel; within a row, blocks in order, each seeded with the steepest
+  // points of the block before it (seeds chain along a row of blocks only, so results never
+  // depend on how rows are split among threads).
+  tbb::parallel_for(tbb::blocked_range<int>(0, blocks_y), [&](const tbb::blocked_range<int>& rows) {
+    BlockSearch walk(tree, g, w, h, field.border == Border::wrap, o.tolerance);
+    std::vector<ConeSearch> searches, fallback;
+    std::vector<ConeSearch::Point> seeds_conservative, seeds_relaxed, seeds;
+    for (int bj = rows.begin(); bj < rows.end(); ++bj) {
+      seeds_conservative.clear();
+      seeds_relaxed.clear();
+      for (int bi = 0; bi < blocks_x; ++bi) {
+        Block b;
+        b.i0 = bi * kBlock;
+        b.j0 = bj * kBlock;
+        b.bw = std::min(kBlock, w - b.i0);
+        b.bh = std::min(kBlock, h - b.j0);
+        b.f = Rect{static_cast<double>(b.i0), static_cast<double>(b.j0), static_cast<double>(b.i0 + b.bw), static_cast<double>(b.j0 + b.bh)};
+        BlockSearch::PerTexel top{}, cap{}, psi{};
+        Mask all = 0;
+        for (int y = 0; y < b.bh; ++y)
+          for (int x = 0; x < b.bw; ++x) {
+            const size_t k = static_cast<size_t>(y * kBlock + x);
+            top[k] = apex[static_cast<size_t>(b.j0 + y) * static_cast<size_t>(w) + static_cast<size_t>(b.i0 + x)];
+            cap[k] = kInf;
+            all |= Mask{1} << k;
           }
-        };
-        visit(0, 0);
-        if (field.border == Border::wrap && search.level() > 0) {
-          // Copies of the tile: none farther than (global max - T) / level can hold a steeper point.
-          const double reach = (global_max - t) / search.level();
-          const int ax = static_cast<int>(std::ceil(reach / w)) + 1, ay = static_cast<int>(std::ceil(reach / h)) + 1;
-          for (int b = -ay; b <= ay; ++b)
-            for (int a = -ax; a <= ax; ++a) {
-              if (a == 0 && b == 0) continue;
-              const Rect r{static_cast<double>(a) * w, static_cast<double>(b) * h, (a + 1.0) * w, (b + 1.0) * h};
-              const double d = rect_distance(r, f);
-              if (d > 0 && (global_max - t) / d <= search.level()) continue;
-              visit(static_cast<double>(a) * w, static_cast<double>(b) * h);
-            }
+        // One search per texel: the supremum of the slope (relaxed: over points seen
+        // descending).
+        walk.run(b, top, relaxed, all, cap, relaxed ? seeds_relaxed : seeds_conservative, searches);
+        std::vector<ConeSearch::Point>& next = relaxed ? seeds_relaxed : seeds_conservative;
+        next.clear();
+        Mask loose = 0;
+        for (Mask q = all; q != 0; q &= q - 1) {
+          const size_t k = static_cast<size_t>(low_bit(q));
+          psi[k] = searches[k].level();
+          if (searches[k].best.valid) next.push_back(searches[k].best);
+          // A relaxed cone is never narrower than the conservative one (which satisfies the
+          // relaxed condition too); where the relaxed search kept a loose bound (near a fan)
+          // the conservative search decides, up to the relaxed bound.
+          if (relaxed && searches[k].bound > searches[k].psi * (1 + o.tolerance)) {
+            loose |= Mask{1} << k;
+            cap[k] = psi[k];
+          }
         }
-        previous = search.best;
-        return std::pair{search.level(), search.bound > search.psi * (1 + o.tolerance)};
-        };
-        auto [psi, loose] = search_texel(relaxed, relaxed ? previous_relaxed : previous_conservative, kInf);
-        // A relaxed cone is never narrower than the conservative one (which satisfies the
-        // relaxed condition too); where the relaxed search kept a loose bound (near a fan)
-        // the conservative search decides.
-        if (relaxed && loose) psi = std::min(psi, search_texel(false, previous_conservative, psi).first);
-        const double ratio = psi > 0 ? 1.0 / (psi * w) : kInf;  // texels -> units of u
-        out.at(i, j, 0) = field.height.at(i, j);
-        out.at(i, j, 1) = round_down(std::min(ratio, static_cast<double>(kConeRatioCap)), o.half);
-        out.at(i, j, 2) = o.half ? round_up_half(static_cast<float>(t)) : static_cast<float>(t);
+        if (loose != 0) {
+          seeds = seeds_conservative;
+          seeds.insert(seeds.end(), seeds_relaxed.begin(), seeds_relaxed.end());  // points above T either way
+          walk.run(b, top, false, loose, cap, seeds, fallback);
+          seeds_conservative.clear();
+          for (Mask q = loose; q != 0; q &= q - 1) {
+            const size_t k = static_cast<size_t>(low_bit(q));
+            psi[k] = std::min(psi[k], fallback[k].level());
+            if (fallback[k].best.valid) seeds_conservative.push_back(fallback[k].best);
+          }
+        }
+        for (Mask q = all; q != 0; q &= q - 1) {
+          const int k = low_bit(q);
+          const int i = b.i0 + (k & (kBlock - 1)), j = b.j0 + (k >> kBlockLog);
+          const double p = psi[static_cast<size_t>(k)];
+          const double ratio = p > 0 ? 1.0 / (p * w) : kInf;  // texels -> units of u
+          out.at(i, j, 0) = field.height.at(i, j);
+          out.at(i, j, 1) = round_down(std::min(ratio, static_cast<double>(kConeRatioCap)), o.half);
+          const double t = top[static_cast<size_t>(k)];
+          out.at(i, j, 2) = o.half ? round_up_half(static_cast<float>(t)) : static_cast<float>(t);
+        }
       }
     }
   });
