@@ -643,6 +643,15 @@ struct Block {
 };
 
 inline int low_bit(Mask m) { return __builtin_ctz(m); }
+// The bits of a block's column 0 and row 0.
+constexpr Mask kColumn = [] {
+  Mask m = 0;
+  for (int r = 0; r < kBlock; ++r) m |= Mask{1} << (r * kBlock);
+  return m;
+}();
+constexpr Mask kRow = (Mask{1} << kBlock) - 1;
+// A texel's 8 neighbours, the sides first.
+constexpr std::array<std::pair<int, int>, 8> kNeighbours = {{{-1, 0}, {1, 0}, {0, -1}, {0, 1}, {-1, -1}, {1, -1}, {-1, 1}, {1, 1}}};
 
 class BlockSearch {
  public:
@@ -670,7 +679,26 @@ class BlockSearch {
       for (const ConeSearch::Point& p : seeds) s[k].seed(p);
       if (s[k].psi < cap[k]) live_ |= Mask{1} << k;
     }
+    // First each texel's own neighbourhood (the 8 texels around it): they touch F, so no
+    // bound dismisses them and they are searched whatever the order; searched first, they
+    // give each texel a slope close to its answer before the walk (its steepest point is
+    // most often next to it), so that the walk's tests dismiss more. The walk then skips them.
+    near_ = true;
+    for (Mask q = live_; q != 0; q &= q - 1) {
+      const int k = low_bit(q);
+      const size_t uk = static_cast<size_t>(k);
+      const int i = b.i0 + (k & (kBlock - 1)), j = b.j0 + (k >> kBlockLog);
+      for (const auto& [dx, dy] : kNeighbours) {
+        const int x = i + dx, y = j + dy;
+        if (x < 0 || y < 0 || x >= w_ || y >= h_ || !(tree_.at(0, x, y) > top[uk]) || !(s[uk].psi < cap[uk])) continue;
+        if (relaxed && rises_away(leaves_.box(x, y), Rect{static_cast<double>(x), static_cast<double>(y), x + 1.0, y + 1.0}, footprint_[uk])) continue;
+        for (int bb = 2 * y; bb <= 2 * y + 1; ++bb)
+          for (int a = 2 * x; a <= 2 * x + 1; ++a) s[uk].piece(piece(0, 0, a, bb));
+      }
+      if (!(s[uk].psi < cap[uk])) live_ &= ~(Mask{1} << k);
+    }
     visit(b, top, cap, s, 0, 0, live_);
+    near_ = false;
     if (wrap_) {
       // Copies of the tile: none farther than (global max - T) / level can hold a steeper
       // point. A texel with nothing higher in the tile has nothing higher in any copy.
@@ -795,6 +823,16 @@ class BlockSearch {
         if (keep != 0 && relaxed_) keep = rising(&tree_.gradient[static_cast<size_t>(n.level)][index * 4], r, b, keep);
         if (keep == 0) continue;
       } else {
+        if (near_) {
+          // The texels whose neighbourhood holds this leaf have searched it already.
+          const int c = n.x - b.i0, rr = n.y - b.j0;
+          Mask cols = 0, rows = 0;
+          for (int u = std::max(c - 1, 0); u <= std::min(c + 1, kBlock - 1); ++u) cols |= kColumn << u;
+          for (int u = std::max(rr - 1, 0); u <= std::min(rr + 1, kBlock - 1); ++u) rows |= kRow << (u * kBlock);
+          keep &= ~(cols & rows);
+          apart &= keep;
+          if (keep == 0) continue;
+        }
         if (apart != 0) keep = planes(leaves_.plane(n.x, n.y), r, n.d, b, top, s, keep, apart, level);
         if (keep != 0 && relaxed_) keep = rising(leaves_.box(n.x, n.y), r, b, keep);
         if (keep == 0) continue;
@@ -872,6 +910,7 @@ class BlockSearch {
   double global_max_;
   LeafCache leaves_;
   bool relaxed_ = false;
+  bool near_ = false;  // visiting the map itself (not a copy): the neighbourhoods are searched
   Mask live_ = 0;  // texels still searching (psi below their cap)
   std::array<Rect, kBlock * kBlock> footprint_{};
   std::vector<Node> stack_;
