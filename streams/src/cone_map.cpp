@@ -24,6 +24,9 @@ constexpr int kMaxDepth = 10;
 // only linearly, and a whole curve of rectangles would reach the depth (measured on the
 // tests' maps: 4 leaves the median and 90th-percentile gaps where 10 had them, 4x faster).
 constexpr int kMaxDepthRelaxed = 4;
+// Depth of the one-dimensional branch and bound along an arc of the edge of the set seen
+// descending (relaxed cones): arcs of 2^-24 of a piece's size.
+constexpr int kArcDepth = 24;
 
 
 // S sampled on the half-texel grid: value (a, b) at pixel (a / 2, b / 2), a in [0, 2W],
@@ -240,73 +243,29 @@ class ConeSearch {
     if (relaxed_ && never_descends(p, s0, t0, s1, t1)) return;
 
     double upper = 0;
+    // Relaxed cones, where psi has no interior maximum: a rectangle that the edge of the
+    // descending set crosses is settled exactly (crossed()) once its bound over every point
+    // has not closed.
+    bool exact_crossing = false;
     if (zx_ == 0 || zy_ == 0) {
-      // Side zone: dist is the gap along one axis. Along a row S is linear, and
-      // (S - T) / gap is then monotone, so the supremum is at a corner; at gap 0 the row's
-      // value tends to at most that of its far end (S <= T on F's edge).
-      for (int k = 0; k < 4; ++k) {
-        const double d = distance(p.x(ss[k]), p.y(ts[k]));
-        if (d > 0) upper = std::max(upper, (v[k] - top_) / d);
-      }
+      upper = side_upper(p, s0, t0, s1, t1, v);
+      exact_crossing = relaxed_ && !descends_throughout(p, s0, t0, s1, t1);
     } else {
-      // Corner zone: dist = |y - c| >= u . (y - c) for any unit u (Cauchy-Schwarz), with
-      // offsets measured away from F (both >= 0 here). (S - T) / (u . (y - c)) is a
-      // bilinear over a linear function, monotone along each axis, so over the rectangle it
-      // peaks at a corner. Each u gives a bound; the directions to the corners and to the
-      // centre make it tight to second order in the rectangle's angular size (exact when the
-      // supremum sits at a corner, as on a plane).
-      std::array<double, 4> ox{}, oy{};
-      double near_x = kInf, near_y = kInf;
-      for (int k = 0; k < 4; ++k) {
-        ox[k] = (p.x(ss[k]) - cx_) * zx_;
-        oy[k] = (p.y(ts[k]) - cy_) * zy_;
-        near_x = std::min(near_x, ox[k]);
-        near_y = std::min(near_y, oy[k]);
-      }
       // First the plain bound (max S - T) / (nearest distance): most pieces end here.
-      if (vmax - top_ <= level() * length(near_x, near_y)) return;
-      if (boundary_max_ && (!relaxed_ || descends_throughout(p, s0, t0, s1, t1))) {
-        // The supremum is on the boundary. (Relaxed cones only where one corner of F sees
-        // the whole rectangle descend: there every point counts, as for conservative ones.)
-        for (int k = 0; k < 4; ++k)
-          if (fresh & (1u << k)) attain(p, ss[k], ts[k], v[k]);
-        for (double t : {t0, t1}) edge_maximum(p, t, s0, s1, true);
-        for (double s : {s0, s1}) edge_maximum(p, s, t0, t1, false);
-        return;
-      }
-      upper = kInf;
-      auto along = [&](double ux, double uy) {
-        const double n = length(ux, uy);
-        if (n <= 0) return;
-        double b = 0;
-        for (int k = 0; k < 4; ++k) {
-          const double l = (ux * ox[k] + uy * oy[k]) / n;
-          if (l <= 0) return;  // u . (y - c) must stay positive on the rectangle
-          b = std::max(b, (v[k] - top_) / l);
+      if (vmax - top_ <= level() * nearest(p, s0, t0, s1, t1)) return;
+      if (boundary_max_) {
+        // The supremum is on the boundary (of the rectangle, or for relaxed cones of its part
+        // seen descending), where it is computed exactly.
+        if (!relaxed_ || descends_throughout(p, s0, t0, s1, t1)) {
+          for (int k = 0; k < 4; ++k)
+            if (fresh & (1u << k)) attain(p, ss[k], ts[k], v[k]);
+          for (double t : {t0, t1}) edge_maximum(p, t, s0, s1, true);
+          for (double s : {s0, s1}) edge_maximum(p, s, t0, t1, false);
+          return;
         }
-        upper = std::min(upper, b);
-      };
-      // The centre first, then the corners, until one settles it.
-      along(ox[0] + ox[3], oy[0] + oy[3]);
-      for (int k = 0; k < 4 && upper > level(); ++k) along(ox[k], oy[k]);
-      if (touches_) {
-        // Mean value bound from c: S(y) - T <= S(c) - T + (grad S(xi) . u) |y - c|, u the
-        // unit direction from c into the zone's quadrant and xi on the segment, inside the
-        // box spanned by c and the rectangle. max over u of g . u is the support function of
-        // the quarter circle (|g| when g points into the quadrant, else its larger component
-        // along the zone), convex in g; the gradient is affine on the piece, so the box's
-        // corners decide.
-        const double bs0 = std::min(s0, sc_), bs1 = std::max(s1, sc_), bt0 = std::min(t0, tc_), bt1 = std::max(t1, tc_);
-        double g = 0;
-        for (double s : {bs0, bs1})
-          for (double t : {bt0, bt1}) {
-            const double gx = p.gx(t) * zx_, gy = p.gy(s) * zy_;
-            g = std::max(g, gx >= 0 && gy >= 0 ? length(gx, gy) : std::max(gx, gy));
-          }
-        double far = 0;
-        for (int k = 0; k < 4; ++k) far = std::max(far, length(p.x(ss[k]) - cx_, p.y(ts[k]) - cy_));
-        if (far > 0) upper = std::min(upper, g + (p.value(sc_, tc_) - top_) / far);
+        exact_crossing = true;
       }
+      upper = corner_upper(p, s0, t0, s1, t1, v);
     }
     if (upper <= level()) return;
     for (int k = 0; k < 4; ++k)
@@ -314,6 +273,7 @@ class ConeSearch {
     const double sm = 0.5 * (s0 + s1), tm = 0.5 * (t0 + t1);
     const double vm = p.value(sm, tm);
     attain(p, sm, tm, vm);
+    if (upper > std::max(psi * (1 + tol_), bound) && exact_crossing && crossed(p, s0, t0, s1, t1)) return;
     if (upper <= std::max(psi * (1 + tol_), bound) || depth >= max_depth_) {
       bound = std::max(bound, upper);
       return;
@@ -325,6 +285,273 @@ class ConeSearch {
     refine(p, sm, t0, s1, tm, {top_mid, v[1], vm, right_mid}, 0x9, depth + 1);
     refine(p, s0, tm, sm, t1, {left_mid, vm, v[2], bottom_mid}, 0x9, depth + 1);
     refine(p, sm, tm, s1, t1, {vm, right_mid, bottom_mid, v[3]}, 0x6, depth + 1);
+  }
+
+  // The nearest distance from a corner-zone rectangle to F (to its corner c).
+  double nearest(const Piece& p, double s0, double t0, double s1, double t1) const {
+    const double ax = (p.x(s0) - cx_) * zx_, bx = (p.x(s1) - cx_) * zx_, ay = (p.y(t0) - cy_) * zy_, by = (p.y(t1) - cy_) * zy_;
+    return length(std::min(ax, bx), std::min(ay, by));
+  }
+
+  // Side zone: dist is the gap along one axis. Along a row S is linear, and (S - T) / gap
+  // is then monotone, so the supremum over the rectangle (and over any part of it cut along
+  // rows) is at a corner; at gap 0 the row's value tends to at most that of its far end
+  // (S <= T on F's edge). The supremum of psi over the rectangle, exactly.
+  double side_upper(const Piece& p, double s0, double t0, double s1, double t1, const std::array<double, 4>& v) const {
+    const std::array<double, 4> ss = {s0, s1, s0, s1}, ts = {t0, t0, t1, t1};
+    double upper = 0;
+    for (int k = 0; k < 4; ++k) {
+      const double d = distance(p.x(ss[k]), p.y(ts[k]));
+      if (d > 0) upper = std::max(upper, (v[k] - top_) / d);
+    }
+    return upper;
+  }
+
+  // Corner zone: an upper bound of psi over the rectangle (every point, seen descending or not).
+  double corner_upper(const Piece& p, double s0, double t0, double s1, double t1, const std::array<double, 4>& v) const {
+    const std::array<double, 4> ss = {s0, s1, s0, s1}, ts = {t0, t0, t1, t1};
+    // dist = |y - c| >= u . (y - c) for any unit u (Cauchy-Schwarz), with offsets measured
+    // away from F (both >= 0 here). (S - T) / (u . (y - c)) is a bilinear over a linear
+    // function, monotone along each axis, so over the rectangle it peaks at a corner. Each u
+    // gives a bound; the directions to the corners and to the centre make it tight to second
+    // order in the rectangle's angular size (exact when the supremum sits at a corner, as on
+    // a plane).
+    std::array<double, 4> ox{}, oy{};
+    for (int k = 0; k < 4; ++k) {
+      ox[k] = (p.x(ss[k]) - cx_) * zx_;
+      oy[k] = (p.y(ts[k]) - cy_) * zy_;
+    }
+    double upper = kInf;
+    auto along = [&](double ux, double uy) {
+      const double n = length(ux, uy);
+      if (n <= 0) return;
+      double b = 0;
+      for (int k = 0; k < 4; ++k) {
+        const double l = (ux * ox[k] + uy * oy[k]) / n;
+        if (l <= 0) return;  // u . (y - c) must stay positive on the rectangle
+        b = std::max(b, (v[k] - top_) / l);
+      }
+      upper = std::min(upper, b);
+    };
+    // The centre first, then the corners, until one settles it.
+    along(ox[0] + ox[3], oy[0] + oy[3]);
+    for (int k = 0; k < 4 && upper > level(); ++k) along(ox[k], oy[k]);
+    if (touches_) {
+      // Mean value bound from c: S(y) - T <= S(c) - T + (grad S(xi) . u) |y - c|, u the
+      // unit direction from c into the zone's quadrant and xi on the segment, inside the
+      // box spanned by c and the rectangle. max over u of g . u is the support function of
+      // the quarter circle (|g| when g points into the quadrant, else its larger component
+      // along the zone), convex in g; the gradient is affine on the piece, so the box's
+      // corners decide.
+      const double bs0 = std::min(s0, sc_), bs1 = std::max(s1, sc_), bt0 = std::min(t0, tc_), bt1 = std::max(t1, tc_);
+      double g = 0;
+      for (double s : {bs0, bs1})
+        for (double t : {bt0, bt1}) {
+          const double gx = p.gx(t) * zx_, gy = p.gy(s) * zy_;
+          g = std::max(g, gx >= 0 && gy >= 0 ? length(gx, gy) : std::max(gx, gy));
+        }
+      double far = 0;
+      for (int k = 0; k < 4; ++k) far = std::max(far, length(p.x(ss[k]) - cx_, p.y(ts[k]) - cy_));
+      if (far > 0) upper = std::min(upper, g + (p.value(sc_, tc_) - top_) / far);
+    }
+    return upper;
+  }
+
+  // A point of the closure of the set seen descending (on the edge of that set, or on a
+  // rectangle's edge next to it): the supremum over the set is the maximum over its closure,
+  // psi being continuous, so such points are offered without the descent test. (Counting a
+  // limit point can only make the cone narrower, never wider.)
+  void attain_closure(const Piece& p, double s, double t) {
+    const double v = p.value(s, t);
+    if (v <= top_) return;
+    const double d = distance(p.x(s), p.y(t));
+    if (d <= 0) return;
+    const double ratio = (v - top_) / d;
+    if (ratio > psi) {
+      psi = ratio;
+      best = {p.x(s), p.y(t), v, p.gx(t), p.gy(s), true};
+    }
+  }
+
+  // f_k(s, t) = grad S(y) . (y - x_k) for a corner x_k of F, on a piece: bilinear in the
+  // local coordinates (grad S is affine, dS/dx in t only and dS/dy in s only), so
+  // f_k = A + B s + C t + E s t; the relaxed cone counts the points where some f_k < 0.
+  struct Bilinear {
+    double a, b, c, e;
+    double at(double s, double t) const { return a + b * s + c * t + e * s * t; }
+  };
+
+  // The exact supremum of psi over the part of a rectangle seen descending, where psi has no
+  // interior maximum (side zone; corner zone with boundary_max_), for a rectangle that the
+  // edge of the descending set D = union of {f_k < 0} crosses. Over R and D_k = {f_k < 0} the
+  // maximum of psi lies on the boundary of R n D_k: the parts of R's edges where f_k <= 0
+  // (f_k is linear along an edge: one interval) and the arcs of the curve f_k = 0 inside R
+  // (a hyperbola's branches, each monotone), searched in one dimension by branch and bound.
+  // Returns false (nothing done) on a degenerate curve, where the caller refines instead.
+  bool crossed(const Piece& p, double s0, double t0, double s1, double t1) {
+    std::array<Bilinear, 4> fk{};
+    std::array<std::array<double, 4>, 4> fv{};
+    int n = 0;
+    for (double fx : {f_.x0, f_.x1})
+      for (double fy : {f_.y0, f_.y1}) {
+        const double dx = p.x0 - fx, dy = p.y0 - fy;
+        // 2 (a + e t)(dx + s / 2) + 2 (b + e s)(dy + t / 2)
+        const Bilinear q{2 * (p.a * dx + p.b * dy), p.a + 2 * p.e * dy, p.b + 2 * p.e * dx, 2 * p.e};
+        const std::array<double, 4> f = {q.at(s0, t0), q.at(s1, t0), q.at(s0, t1), q.at(s1, t1)};
+        if (!(std::min({f[0], f[1], f[2], f[3]}) < 0)) continue;  // D_k misses R (f_k bilinear: corners decide)
+        // The arcs first: a degenerate curve leaves the rectangle to the caller untouched.
+        if (!arcs(q, f, s0, t0, s1, t1, nullptr)) return false;
+        fk[static_cast<size_t>(n)] = q;
+        fv[static_cast<size_t>(n++)] = f;
+      }
+    for (int k = 0; k < n; ++k) {
+      const Bilinear& q = fk[static_cast<size_t>(k)];
+      const std::array<double, 4>& f = fv[static_cast<size_t>(k)];
+      edge_part(p, t0, s0, s1, f[0], f[1], true);
+      edge_part(p, t1, s0, s1, f[2], f[3], true);
+      edge_part(p, s0, t0, t1, f[0], f[2], false);
+      edge_part(p, s1, t0, t1, f[1], f[3], false);
+      arcs(q, f, s0, t0, s1, t1, &p);
+    }
+    return true;
+  }
+
+  // The part of an edge where f <= 0 (f linear along it, flo and fhi at its ends): its ends,
+  // and in the corner zone the edge's interior maximum (edge_maximum) when inside.
+  void edge_part(const Piece& p, double fixed, double lo, double hi, double flo, double fhi, bool along_x) {
+    if (flo > 0 && fhi > 0) return;
+    double a = lo, b = hi;
+    if (flo > 0) a = lo + (hi - lo) * (flo / (flo - fhi));
+    if (fhi > 0) b = lo + (hi - lo) * (flo / (flo - fhi));
+    a = std::clamp(a, lo, hi);
+    b = std::clamp(b, lo, hi);
+    for (double q : {a, b}) {
+      if (along_x) {
+        attain_closure(p, q, fixed);
+      } else {
+        attain_closure(p, fixed, q);
+      }
+    }
+    if (zx_ != 0 && zy_ != 0 && b > a) edge_maximum(p, fixed, a, b, along_x);
+  }
+
+  // The arcs of f = 0 inside [s0, s1] x [t0, t1] (f's corner values in fc): with p null,
+  // only whether they are well formed (each branch crosses the boundary twice); with p,
+  // each arc searched for psi's maximum.
+  bool arcs(const Bilinear& f, const std::array<double, 4>& fc, double s0, double t0, double s1, double t1, const Piece* p) {
+    // Where f = 0 on the boundary: sign changes along the edges, and corners where f = 0.
+    std::array<std::array<double, 2>, 8> at{};
+    int count = 0;
+    auto add = [&](double s, double t) {
+      for (int k = 0; k < count; ++k)
+        if (at[static_cast<size_t>(k)][0] == s && at[static_cast<size_t>(k)][1] == t) return;
+      if (count < 8) at[static_cast<size_t>(count)] = {s, t};
+      ++count;
+    };
+    const std::array<double, 4> ss = {s0, s1, s0, s1}, ts = {t0, t0, t1, t1};
+    for (int k = 0; k < 4; ++k)
+      if (fc[static_cast<size_t>(k)] == 0) add(ss[static_cast<size_t>(k)], ts[static_cast<size_t>(k)]);
+    auto edge = [&](int i, int j) {  // corners i and j, one edge
+      const double fi = fc[static_cast<size_t>(i)], fj = fc[static_cast<size_t>(j)];
+      if (!((fi < 0 && fj > 0) || (fi > 0 && fj < 0))) return;
+      const double r = fi / (fi - fj);
+      add(ss[static_cast<size_t>(i)] + r * (ss[static_cast<size_t>(j)] - ss[static_cast<size_t>(i)]),
+          ts[static_cast<size_t>(i)] + r * (ts[static_cast<size_t>(j)] - ts[static_cast<size_t>(i)]));
+    };
+    edge(0, 1);
+    edge(2, 3);
+    edge(0, 2);
+    edge(1, 3);
+    if (count == 0) return true;
+    // Branches: f = e (s - s*)(t - t*) + const with s* = -c / e; a branch keeps the sign of
+    // s - s* (a line when e = 0: one branch). Each must meet the boundary exactly twice.
+    std::array<int, 8> side{};
+    int minus = 0, plus = 0;
+    for (int k = 0; k < count && k < 8; ++k) {
+      int sgn = 1;
+      if (f.e != 0) {
+        const double d = at[static_cast<size_t>(k)][0] + f.c / f.e;
+        if (d == 0) return false;
+        sgn = d > 0 ? 1 : -1;
+      }
+      side[static_cast<size_t>(k)] = sgn;
+      (sgn > 0 ? plus : minus) += 1;
+    }
+    if (count > 4 || (minus != 0 && minus != 2) || (plus != 0 && plus != 2)) return false;
+    if (p == nullptr) return true;
+    for (int sgn : {-1, 1}) {
+      std::array<double, 4> arc{};
+      int got = 0;
+      for (int k = 0; k < count; ++k)
+        if (side[static_cast<size_t>(k)] == sgn) {
+          arc[static_cast<size_t>(2 * got)] = at[static_cast<size_t>(k)][0];
+          arc[static_cast<size_t>(2 * got + 1)] = at[static_cast<size_t>(k)][1];
+          ++got;
+        }
+      if (got == 2) search_arc(*p, f, arc);
+    }
+    return true;
+  }
+
+  // Branch and bound along one monotone arc of f = 0 between (arc[0], arc[1]) and (arc[2],
+  // arc[3]): the arc lies in the box of its ends, whose bound (side_upper / corner_upper)
+  // holds for it; boxes are halved along the arc until the bound is within the tolerance
+  // of a value attained on the arc.
+  void search_arc(const Piece& p, const Bilinear& f, const std::array<double, 4>& whole) {
+    attain_closure(p, whole[0], whole[1]);
+    attain_closure(p, whole[2], whole[3]);
+    struct Arc {
+      std::array<double, 4> e;
+      int depth;
+    };
+    std::array<Arc, 2 * kArcDepth + 2> stack{};
+    int top = 0;
+    stack[static_cast<size_t>(top++)] = {whole, 0};
+    while (top > 0) {
+      const Arc a = stack[static_cast<size_t>(--top)];
+      const double bs0 = std::min(a.e[0], a.e[2]), bs1 = std::max(a.e[0], a.e[2]);
+      const double bt0 = std::min(a.e[1], a.e[3]), bt1 = std::max(a.e[1], a.e[3]);
+      const std::array<double, 4> v = {p.value(bs0, bt0), p.value(bs1, bt0), p.value(bs0, bt1), p.value(bs1, bt1)};
+      if (std::max({v[0], v[1], v[2], v[3]}) <= top_) continue;
+      double upper, near;
+      if (zx_ == 0 || zy_ == 0) {
+        upper = side_upper(p, bs0, bt0, bs1, bt1, v);
+        near = std::min(distance(p.x(bs0), p.y(bt0)), distance(p.x(bs1), p.y(bt1)));  // dist is monotone across the box
+      } else {
+        const double vmax = std::max({v[0], v[1], v[2], v[3]});
+        near = nearest(p, bs0, bt0, bs1, bt1);
+        if (vmax - top_ <= level() * near) continue;
+        upper = corner_upper(p, bs0, bt0, bs1, bt1, v);
+      }
+      if (upper <= level()) continue;
+      // The arc's point halfway along its longer extent.
+      double sm, tm;
+      if (bs1 - bs0 >= bt1 - bt0) {
+        sm = 0.5 * (bs0 + bs1);
+        tm = std::clamp(-(f.a + f.b * sm) / (f.c + f.e * sm), bt0, bt1);
+      } else {
+        tm = 0.5 * (bt0 + bt1);
+        sm = std::clamp(-(f.a + f.c * tm) / (f.b + f.e * tm), bs0, bs1);
+      }
+      if (!std::isfinite(sm) || !std::isfinite(tm)) {
+        bound = std::max(bound, upper);
+        continue;
+      }
+      attain_closure(p, sm, tm);
+      // A box touching F's boundary (where the arc may end at a point with S = T) is left
+      // with its bound soon: there psi is homogeneous of degree 0 in the offset, so the
+      // bound of a box does not shrink with the box, and halving would go on to the cap.
+      if (upper <= std::max(psi * (1 + tol_), bound) || a.depth >= (near > 0 ? kArcDepth : max_depth_)) {
+        bound = std::max(bound, upper);
+        continue;
+      }
+      // The half nearer F last, so searched first: bounds grow toward F, and once the
+      // largest is kept the rest of the arc is dismissed against it.
+      const Arc first{{a.e[0], a.e[1], sm, tm}, a.depth + 1}, second{{sm, tm, a.e[2], a.e[3]}, a.depth + 1};
+      const bool first_nearer = distance(p.x(a.e[0]), p.y(a.e[1])) < distance(p.x(a.e[2]), p.y(a.e[3]));
+      stack[static_cast<size_t>(top++)] = first_nearer ? second : first;
+      stack[static_cast<size_t>(top++)] = first_nearer ? first : second;
+    }
   }
 
   Rect f_;
