@@ -55,8 +55,9 @@ HalfGrid half_grid(const HeightField& f) {
 // coordinates s = 2 (x - x0), t = 2 (y - y0) in [0, 1].
 struct Piece {
   double x0 = 0, y0 = 0, c = 0, a = 0, b = 0, e = 0;
+  double top = 0;  // the largest corner value: S's maximum on the piece (a bilinear's is at a corner)
   Piece(double px, double py, double v00, double v10, double v01, double v11)
-      : x0(px), y0(py), c(v00), a(v10 - v00), b(v01 - v00), e(v00 - v10 - v01 + v11) {}
+      : x0(px), y0(py), c(v00), a(v10 - v00), b(v01 - v00), e(v00 - v10 - v01 + v11), top(std::max(std::max(v00, v10), std::max(v01, v11))) {}
   double value(double s, double t) const { return c + a * s + b * t + e * s * t; }
   double gx(double t) const { return 2.0 * (a + e * t); }  // dS/dx, per pixel
   double gy(double s) const { return 2.0 * (b + e * s); }
@@ -100,6 +101,7 @@ class ConeSearch {
   double level() const { return std::max(psi, bound); }
 
   void piece(const Piece& p) {
+    if (p.top <= top_) return;  // no point above the apex (most pieces offered)
     const double px1 = p.x0 + 0.5, py1 = p.y0 + 0.5;
     zx_ = p.x0 >= f_.x1 ? 1 : (px1 <= f_.x0 ? -1 : 0);
     zy_ = p.y0 >= f_.y1 ? 1 : (py1 <= f_.y0 ? -1 : 0);
@@ -132,6 +134,13 @@ class ConeSearch {
     const double dx = gap(f_.x0, f_.x1, x, x);
     const double dy = gap(f_.y0, f_.y1, y, y);
     return length(dx, dy);
+  }
+  // The same for a point of the current piece, whose zone fixes the form: the gap along one
+  // axis beside F (no square root), the distance to the corner c off it.
+  double piece_distance(double x, double y) const {
+    if (zy_ == 0) return std::max(zx_ > 0 ? x - f_.x1 : f_.x0 - x, 0.0);
+    if (zx_ == 0) return std::max(zy_ > 0 ? y - f_.y1 : f_.y0 - y, 0.0);
+    return length(x - cx_, y - cy_);
   }
   // Some point of F sees the surface at (s, t) fall away: grad S . (y - x) < 0. Linear in x,
   // so F's corners decide; the sum is smallest at the corner where each of its two terms is,
@@ -183,7 +192,7 @@ class ConeSearch {
   }
   void attain(const Piece& p, double s, double t, double v) {
     if (v <= top_) return;  // most points offered; the distance is not needed for them
-    const double d = distance(p.x(s), p.y(t));
+    const double d = piece_distance(p.x(s), p.y(t));
     if (d <= 0) return;
     const double ratio = (v - top_) / d;
     if (ratio > psi && (!relaxed_ || descends(p, s, t))) {  // the cheaper test first
@@ -257,6 +266,18 @@ class ConeSearch {
         // The supremum is on the boundary (of the rectangle, or for relaxed cones of its part
         // seen descending), where it is computed exactly.
         if (!relaxed_ || descends_throughout(p, s0, t0, s1, t1)) {
+          // One bound first (the direction to the rectangle's centre, see corner_upper),
+          // cheaper than the eight evaluations below when it settles the rectangle.
+          if (!touches_) {
+            const double ux = p.x(s0) + p.x(s1) - 2 * cx_, uy = p.y(t0) + p.y(t1) - 2 * cy_;
+            const double n = length(ux, uy);
+            double b = 0;
+            for (int k = 0; k < 4 && b <= level(); ++k) {
+              const double l = (ux * (p.x(ss[k]) - cx_) + uy * (p.y(ts[k]) - cy_)) / n;  // u . (y - c), u the unit direction to the centre
+              b = l > 0 ? std::max(b, (v[k] - top_) / l) : kInf;
+            }
+            if (b <= level()) return;
+          }
           for (int k = 0; k < 4; ++k)
             if (fresh & (1u << k)) attain(p, ss[k], ts[k], v[k]);
           for (double t : {t0, t1}) edge_maximum(p, t, s0, s1, true);
@@ -301,7 +322,7 @@ class ConeSearch {
     const std::array<double, 4> ss = {s0, s1, s0, s1}, ts = {t0, t0, t1, t1};
     double upper = 0;
     for (int k = 0; k < 4; ++k) {
-      const double d = distance(p.x(ss[k]), p.y(ts[k]));
+      const double d = piece_distance(p.x(ss[k]), p.y(ts[k]));
       if (d > 0) upper = std::max(upper, (v[k] - top_) / d);
     }
     return upper;
@@ -364,7 +385,7 @@ class ConeSearch {
   void attain_closure(const Piece& p, double s, double t) {
     const double v = p.value(s, t);
     if (v <= top_) return;
-    const double d = distance(p.x(s), p.y(t));
+    const double d = piece_distance(p.x(s), p.y(t));
     if (d <= 0) return;
     const double ratio = (v - top_) / d;
     if (ratio > psi) {
