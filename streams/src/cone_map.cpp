@@ -1029,6 +1029,7 @@ class BlockSearch {
       const Rect r{ox + static_cast<double>(n.x) * size, oy + static_cast<double>(n.y) * size,
                    ox + std::min(static_cast<double>(n.x + 1) * size, static_cast<double>(w_)),
                    oy + std::min(static_cast<double>(n.y + 1) * size, static_cast<double>(h_))};
+      const double size2 = static_cast<double>(size) * size;
       // Squared gaps from each column and row of the block's texels to the node.
       for (int c = 0; c < b.bw; ++c) {
         const double gp = gap(b.i0 + c, b.i0 + c + 1.0, r.x0, r.x1);
@@ -1051,7 +1052,11 @@ class BlockSearch {
         level2[uk] = level[uk] * level[uk];
         if (d2 > 0) {
           if (e * e <= level2[uk] * d2) continue;
-          apart |= Mask{1} << k;
+          // The plane test only for nodes no larger than their distance: closer, the cone's
+          // distance term bends across the node and the test almost never dismisses it
+          // (measured on the bricks at 256²: 3 % of the tests at 8 texels, none above; a test
+          // costs ~300 instructions). Only a prune is skipped, never a point counted.
+          if (size2 <= d2) apart |= Mask{1} << k;
         }
         keep |= Mask{1} << k;
       }
