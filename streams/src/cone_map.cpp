@@ -249,19 +249,21 @@ class ConeSearch {
     double vmax = -kInf;
     for (int k = 0; k < 4; ++k) vmax = std::max(vmax, v[k]);  // a bilinear function's maximum is at a corner
     if (vmax <= top_) return;
-    if (relaxed_ && never_descends(p, s0, t0, s1, t1)) return;
 
     double upper = 0;
     // Relaxed cones, where psi has no interior maximum: a rectangle that the edge of the
     // descending set crosses is settled exactly (crossed()) once its bound over every point
     // has not closed.
     bool exact_crossing = false;
+    // (The descent tests after the cheapest bound, which ends more rectangles for less.)
     if (zx_ == 0 || zy_ == 0) {
       upper = side_upper(p, s0, t0, s1, t1, v);
+      if (upper <= level() || (relaxed_ && never_descends(p, s0, t0, s1, t1))) return;
       exact_crossing = relaxed_ && !descends_throughout(p, s0, t0, s1, t1);
     } else {
       // First the plain bound (max S - T) / (nearest distance): most pieces end here.
       if (vmax - top_ <= level() * nearest(p, s0, t0, s1, t1)) return;
+      if (relaxed_ && never_descends(p, s0, t0, s1, t1)) return;
       if (boundary_max_) {
         // The supremum is on the boundary (of the rectangle, or for relaxed cones of its part
         // seen descending), where it is computed exactly.
