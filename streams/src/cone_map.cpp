@@ -1164,6 +1164,14 @@ class BlockSearch {
 
 }  // namespace
 
+// A seed for the next block, once: neighbouring texels often share their steepest point.
+void add_seed(std::vector<ConeSearch::Point>& seeds, const ConeSearch::Point& p) {
+  if (!p.valid) return;
+  for (const ConeSearch::Point& q : seeds)
+    if (q.x == p.x && q.y == p.y) return;
+  seeds.push_back(p);
+}
+
 Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
   HeightField field = input;
   if (o.half)
@@ -1219,7 +1227,7 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
         for (Mask q = all; q != 0; q &= q - 1) {
           const size_t k = static_cast<size_t>(low_bit(q));
           psi[k] = searches[k].level();
-          if (searches[k].best.valid) next.push_back(searches[k].best);
+          add_seed(next, searches[k].best);
           // A relaxed cone is never narrower than the conservative one (which satisfies the
           // relaxed condition too); where the relaxed search kept a loose bound (near a fan)
           // the conservative search decides, up to the relaxed bound.
@@ -1236,7 +1244,7 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
           for (Mask q = loose; q != 0; q &= q - 1) {
             const size_t k = static_cast<size_t>(low_bit(q));
             psi[k] = std::min(psi[k], fallback[k].level());
-            if (fallback[k].best.valid) seeds_conservative.push_back(fallback[k].best);
+            add_seed(seeds_conservative, fallback[k].best);
           }
         }
         for (Mask q = all; q != 0; q &= q - 1) {
