@@ -880,8 +880,8 @@ class LeafCache {
 // gradient box, the pieces) stay per texel, so each texel's answer is still the exact
 // supremum of its own cone within the tolerance. The result depends on the blocks (the
 // order in which each texel meets the nodes, within the tolerance) but not on the threads.
-// Measured (callgrind, 256² and 512² maps of bench/cone_time): 4 x 4 texels; 2 x 2 shares
-// less, 8 x 8 costs 20-60 % more (each texel meets far nodes before its near ones).
+// Measured (callgrind, the 256² maps of bench/cone_time): 2 x 2 texels cost 6-11 % more
+// (less is shared), 8 x 8 20-60 % more (each texel meets far nodes before its near ones).
 constexpr int kBlockLog = 2;
 constexpr int kBlock = 1 << kBlockLog;  // texel k of a block: column k % kBlock, row k / kBlock
 using Mask = uint32_t;
