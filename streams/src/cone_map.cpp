@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 namespace meso {
@@ -23,6 +24,9 @@ constexpr int kMaxDepth = 10;
 // only linearly, and a whole curve of rectangles would reach the depth (measured on the
 // tests' maps: 4 leaves the median and 90th-percentile gaps where 10 had them, 4x faster).
 constexpr int kMaxDepthRelaxed = 4;
+// Depth of the one-dimensional branch and bound along an arc of the edge of the set seen
+// descending (relaxed cones): arcs of 2^-24 of a piece's size.
+constexpr int kArcDepth = 24;
 
 
 // S sampled on the half-texel grid: value (a, b) at pixel (a / 2, b / 2), a in [0, 2W],
@@ -51,8 +55,9 @@ HalfGrid half_grid(const HeightField& f) {
 // coordinates s = 2 (x - x0), t = 2 (y - y0) in [0, 1].
 struct Piece {
   double x0 = 0, y0 = 0, c = 0, a = 0, b = 0, e = 0;
+  double top = 0;  // the largest corner value: S's maximum on the piece (a bilinear's is at a corner)
   Piece(double px, double py, double v00, double v10, double v01, double v11)
-      : x0(px), y0(py), c(v00), a(v10 - v00), b(v01 - v00), e(v00 - v10 - v01 + v11) {}
+      : x0(px), y0(py), c(v00), a(v10 - v00), b(v01 - v00), e(v00 - v10 - v01 + v11), top(std::max(std::max(v00, v10), std::max(v01, v11))) {}
   double value(double s, double t) const { return c + a * s + b * t + e * s * t; }
   double gx(double t) const { return 2.0 * (a + e * t); }  // dS/dx, per pixel
   double gy(double s) const { return 2.0 * (b + e * s); }
@@ -96,6 +101,7 @@ class ConeSearch {
   double level() const { return std::max(psi, bound); }
 
   void piece(const Piece& p) {
+    if (p.top <= top_) return;  // no point above the apex (most pieces offered)
     const double px1 = p.x0 + 0.5, py1 = p.y0 + 0.5;
     zx_ = p.x0 >= f_.x1 ? 1 : (px1 <= f_.x0 ? -1 : 0);
     zy_ = p.y0 >= f_.y1 ? 1 : (py1 <= f_.y0 ? -1 : 0);
@@ -128,6 +134,13 @@ class ConeSearch {
     const double dx = gap(f_.x0, f_.x1, x, x);
     const double dy = gap(f_.y0, f_.y1, y, y);
     return length(dx, dy);
+  }
+  // The same for a point of the current piece, whose zone fixes the form: the gap along one
+  // axis beside F (no square root), the distance to the corner c off it.
+  double piece_distance(double x, double y) const {
+    if (zy_ == 0) return std::max(zx_ > 0 ? x - f_.x1 : f_.x0 - x, 0.0);
+    if (zx_ == 0) return std::max(zy_ > 0 ? y - f_.y1 : f_.y0 - y, 0.0);
+    return length(x - cx_, y - cy_);
   }
   // Some point of F sees the surface at (s, t) fall away: grad S . (y - x) < 0. Linear in x,
   // so F's corners decide; the sum is smallest at the corner where each of its two terms is,
@@ -179,7 +192,7 @@ class ConeSearch {
   }
   void attain(const Piece& p, double s, double t, double v) {
     if (v <= top_) return;  // most points offered; the distance is not needed for them
-    const double d = distance(p.x(s), p.y(t));
+    const double d = piece_distance(p.x(s), p.y(t));
     if (d <= 0) return;
     const double ratio = (v - top_) / d;
     if (ratio > psi && (!relaxed_ || descends(p, s, t))) {  // the cheaper test first
@@ -236,76 +249,46 @@ class ConeSearch {
     double vmax = -kInf;
     for (int k = 0; k < 4; ++k) vmax = std::max(vmax, v[k]);  // a bilinear function's maximum is at a corner
     if (vmax <= top_) return;
-    if (relaxed_ && never_descends(p, s0, t0, s1, t1)) return;
 
     double upper = 0;
+    // Relaxed cones, where psi has no interior maximum: a rectangle that the edge of the
+    // descending set crosses is settled exactly (crossed()) once its bound over every point
+    // has not closed.
+    bool exact_crossing = false;
+    // (The descent tests after the cheapest bound, which ends more rectangles for less.)
     if (zx_ == 0 || zy_ == 0) {
-      // Side zone: dist is the gap along one axis. Along a row S is linear, and
-      // (S - T) / gap is then monotone, so the supremum is at a corner; at gap 0 the row's
-      // value tends to at most that of its far end (S <= T on F's edge).
-      for (int k = 0; k < 4; ++k) {
-        const double d = distance(p.x(ss[k]), p.y(ts[k]));
-        if (d > 0) upper = std::max(upper, (v[k] - top_) / d);
-      }
+      upper = side_upper(p, s0, t0, s1, t1, v);
+      if (upper <= level() || (relaxed_ && never_descends(p, s0, t0, s1, t1))) return;
+      exact_crossing = relaxed_ && !descends_throughout(p, s0, t0, s1, t1);
     } else {
-      // Corner zone: dist = |y - c| >= u . (y - c) for any unit u (Cauchy-Schwarz), with
-      // offsets measured away from F (both >= 0 here). (S - T) / (u . (y - c)) is a
-      // bilinear over a linear function, monotone along each axis, so over the rectangle it
-      // peaks at a corner. Each u gives a bound; the directions to the corners and to the
-      // centre make it tight to second order in the rectangle's angular size (exact when the
-      // supremum sits at a corner, as on a plane).
-      std::array<double, 4> ox{}, oy{};
-      double near_x = kInf, near_y = kInf;
-      for (int k = 0; k < 4; ++k) {
-        ox[k] = (p.x(ss[k]) - cx_) * zx_;
-        oy[k] = (p.y(ts[k]) - cy_) * zy_;
-        near_x = std::min(near_x, ox[k]);
-        near_y = std::min(near_y, oy[k]);
-      }
       // First the plain bound (max S - T) / (nearest distance): most pieces end here.
-      if (vmax - top_ <= level() * length(near_x, near_y)) return;
-      if (boundary_max_ && (!relaxed_ || descends_throughout(p, s0, t0, s1, t1))) {
-        // The supremum is on the boundary. (Relaxed cones only where one corner of F sees
-        // the whole rectangle descend: there every point counts, as for conservative ones.)
-        for (int k = 0; k < 4; ++k)
-          if (fresh & (1u << k)) attain(p, ss[k], ts[k], v[k]);
-        for (double t : {t0, t1}) edge_maximum(p, t, s0, s1, true);
-        for (double s : {s0, s1}) edge_maximum(p, s, t0, t1, false);
-        return;
-      }
-      upper = kInf;
-      auto along = [&](double ux, double uy) {
-        const double n = length(ux, uy);
-        if (n <= 0) return;
-        double b = 0;
-        for (int k = 0; k < 4; ++k) {
-          const double l = (ux * ox[k] + uy * oy[k]) / n;
-          if (l <= 0) return;  // u . (y - c) must stay positive on the rectangle
-          b = std::max(b, (v[k] - top_) / l);
-        }
-        upper = std::min(upper, b);
-      };
-      // The centre first, then the corners, until one settles it.
-      along(ox[0] + ox[3], oy[0] + oy[3]);
-      for (int k = 0; k < 4 && upper > level(); ++k) along(ox[k], oy[k]);
-      if (touches_) {
-        // Mean value bound from c: S(y) - T <= S(c) - T + (grad S(xi) . u) |y - c|, u the
-        // unit direction from c into the zone's quadrant and xi on the segment, inside the
-        // box spanned by c and the rectangle. max over u of g . u is the support function of
-        // the quarter circle (|g| when g points into the quadrant, else its larger component
-        // along the zone), convex in g; the gradient is affine on the piece, so the box's
-        // corners decide.
-        const double bs0 = std::min(s0, sc_), bs1 = std::max(s1, sc_), bt0 = std::min(t0, tc_), bt1 = std::max(t1, tc_);
-        double g = 0;
-        for (double s : {bs0, bs1})
-          for (double t : {bt0, bt1}) {
-            const double gx = p.gx(t) * zx_, gy = p.gy(s) * zy_;
-            g = std::max(g, gx >= 0 && gy >= 0 ? length(gx, gy) : std::max(gx, gy));
+      if (vmax - top_ <= level() * nearest(p, s0, t0, s1, t1)) return;
+      if (relaxed_ && never_descends(p, s0, t0, s1, t1)) return;
+      if (boundary_max_) {
+        // The supremum is on the boundary (of the rectangle, or for relaxed cones of its part
+        // seen descending), where it is computed exactly.
+        if (!relaxed_ || descends_throughout(p, s0, t0, s1, t1)) {
+          // One bound first (the direction to the rectangle's centre, see corner_upper),
+          // cheaper than the eight evaluations below when it settles the rectangle.
+          if (!touches_) {
+            const double ux = p.x(s0) + p.x(s1) - 2 * cx_, uy = p.y(t0) + p.y(t1) - 2 * cy_;
+            const double n = length(ux, uy);
+            double b = 0;
+            for (int k = 0; k < 4 && b <= level(); ++k) {
+              const double l = (ux * (p.x(ss[k]) - cx_) + uy * (p.y(ts[k]) - cy_)) / n;  // u . (y - c), u the unit direction to the centre
+              b = l > 0 ? std::max(b, (v[k] - top_) / l) : kInf;
+            }
+            if (b <= level()) return;
           }
-        double far = 0;
-        for (int k = 0; k < 4; ++k) far = std::max(far, length(p.x(ss[k]) - cx_, p.y(ts[k]) - cy_));
-        if (far > 0) upper = std::min(upper, g + (p.value(sc_, tc_) - top_) / far);
+          for (int k = 0; k < 4; ++k)
+            if (fresh & (1u << k)) attain(p, ss[k], ts[k], v[k]);
+          for (double t : {t0, t1}) edge_maximum(p, t, s0, s1, true);
+          for (double s : {s0, s1}) edge_maximum(p, s, t0, t1, false);
+          return;
+        }
+        exact_crossing = true;
       }
+      upper = corner_upper(p, s0, t0, s1, t1, v);
     }
     if (upper <= level()) return;
     for (int k = 0; k < 4; ++k)
@@ -313,6 +296,7 @@ class ConeSearch {
     const double sm = 0.5 * (s0 + s1), tm = 0.5 * (t0 + t1);
     const double vm = p.value(sm, tm);
     attain(p, sm, tm, vm);
+    if (upper > std::max(psi * (1 + tol_), bound) && exact_crossing && crossed(p, s0, t0, s1, t1)) return;
     if (upper <= std::max(psi * (1 + tol_), bound) || depth >= max_depth_) {
       bound = std::max(bound, upper);
       return;
@@ -324,6 +308,273 @@ class ConeSearch {
     refine(p, sm, t0, s1, tm, {top_mid, v[1], vm, right_mid}, 0x9, depth + 1);
     refine(p, s0, tm, sm, t1, {left_mid, vm, v[2], bottom_mid}, 0x9, depth + 1);
     refine(p, sm, tm, s1, t1, {vm, right_mid, bottom_mid, v[3]}, 0x6, depth + 1);
+  }
+
+  // The nearest distance from a corner-zone rectangle to F (to its corner c).
+  double nearest(const Piece& p, double s0, double t0, double s1, double t1) const {
+    const double ax = (p.x(s0) - cx_) * zx_, bx = (p.x(s1) - cx_) * zx_, ay = (p.y(t0) - cy_) * zy_, by = (p.y(t1) - cy_) * zy_;
+    return length(std::min(ax, bx), std::min(ay, by));
+  }
+
+  // Side zone: dist is the gap along one axis. Along a row S is linear, and (S - T) / gap
+  // is then monotone, so the supremum over the rectangle (and over any part of it cut along
+  // rows) is at a corner; at gap 0 the row's value tends to at most that of its far end
+  // (S <= T on F's edge). The supremum of psi over the rectangle, exactly.
+  double side_upper(const Piece& p, double s0, double t0, double s1, double t1, const std::array<double, 4>& v) const {
+    const std::array<double, 4> ss = {s0, s1, s0, s1}, ts = {t0, t0, t1, t1};
+    double upper = 0;
+    for (int k = 0; k < 4; ++k) {
+      const double d = piece_distance(p.x(ss[k]), p.y(ts[k]));
+      if (d > 0) upper = std::max(upper, (v[k] - top_) / d);
+    }
+    return upper;
+  }
+
+  // Corner zone: an upper bound of psi over the rectangle (every point, seen descending or not).
+  double corner_upper(const Piece& p, double s0, double t0, double s1, double t1, const std::array<double, 4>& v) const {
+    const std::array<double, 4> ss = {s0, s1, s0, s1}, ts = {t0, t0, t1, t1};
+    // dist = |y - c| >= u . (y - c) for any unit u (Cauchy-Schwarz), with offsets measured
+    // away from F (both >= 0 here). (S - T) / (u . (y - c)) is a bilinear over a linear
+    // function, monotone along each axis, so over the rectangle it peaks at a corner. Each u
+    // gives a bound; the directions to the corners and to the centre make it tight to second
+    // order in the rectangle's angular size (exact when the supremum sits at a corner, as on
+    // a plane).
+    std::array<double, 4> ox{}, oy{};
+    for (int k = 0; k < 4; ++k) {
+      ox[k] = (p.x(ss[k]) - cx_) * zx_;
+      oy[k] = (p.y(ts[k]) - cy_) * zy_;
+    }
+    double upper = kInf;
+    auto along = [&](double ux, double uy) {
+      const double n = length(ux, uy);
+      if (n <= 0) return;
+      double b = 0;
+      for (int k = 0; k < 4; ++k) {
+        const double l = (ux * ox[k] + uy * oy[k]) / n;
+        if (l <= 0) return;  // u . (y - c) must stay positive on the rectangle
+        b = std::max(b, (v[k] - top_) / l);
+      }
+      upper = std::min(upper, b);
+    };
+    // The centre first, then the corners, until one settles it.
+    along(ox[0] + ox[3], oy[0] + oy[3]);
+    for (int k = 0; k < 4 && upper > level(); ++k) along(ox[k], oy[k]);
+    if (touches_) {
+      // Mean value bound from c: S(y) - T <= S(c) - T + (grad S(xi) . u) |y - c|, u the
+      // unit direction from c into the zone's quadrant and xi on the segment, inside the
+      // box spanned by c and the rectangle. max over u of g . u is the support function of
+      // the quarter circle (|g| when g points into the quadrant, else its larger component
+      // along the zone), convex in g; the gradient is affine on the piece, so the box's
+      // corners decide.
+      const double bs0 = std::min(s0, sc_), bs1 = std::max(s1, sc_), bt0 = std::min(t0, tc_), bt1 = std::max(t1, tc_);
+      double g = 0;
+      for (double s : {bs0, bs1})
+        for (double t : {bt0, bt1}) {
+          const double gx = p.gx(t) * zx_, gy = p.gy(s) * zy_;
+          g = std::max(g, gx >= 0 && gy >= 0 ? length(gx, gy) : std::max(gx, gy));
+        }
+      double far = 0;
+      for (int k = 0; k < 4; ++k) far = std::max(far, length(p.x(ss[k]) - cx_, p.y(ts[k]) - cy_));
+      if (far > 0) upper = std::min(upper, g + (p.value(sc_, tc_) - top_) / far);
+    }
+    return upper;
+  }
+
+  // A point of the closure of the set seen descending (on the edge of that set, or on a
+  // rectangle's edge next to it): the supremum over the set is the maximum over its closure,
+  // psi being continuous, so such points are offered without the descent test. (Counting a
+  // limit point can only make the cone narrower, never wider.)
+  void attain_closure(const Piece& p, double s, double t) {
+    const double v = p.value(s, t);
+    if (v <= top_) return;
+    const double d = piece_distance(p.x(s), p.y(t));
+    if (d <= 0) return;
+    const double ratio = (v - top_) / d;
+    if (ratio > psi) {
+      psi = ratio;
+      best = {p.x(s), p.y(t), v, p.gx(t), p.gy(s), true};
+    }
+  }
+
+  // f_k(s, t) = grad S(y) . (y - x_k) for a corner x_k of F, on a piece: bilinear in the
+  // local coordinates (grad S is affine, dS/dx in t only and dS/dy in s only), so
+  // f_k = A + B s + C t + E s t; the relaxed cone counts the points where some f_k < 0.
+  struct Bilinear {
+    double a, b, c, e;
+    double at(double s, double t) const { return a + b * s + c * t + e * s * t; }
+  };
+
+  // The exact supremum of psi over the part of a rectangle seen descending, where psi has no
+  // interior maximum (side zone; corner zone with boundary_max_), for a rectangle that the
+  // edge of the descending set D = union of {f_k < 0} crosses. Over R and D_k = {f_k < 0} the
+  // maximum of psi lies on the boundary of R n D_k: the parts of R's edges where f_k <= 0
+  // (f_k is linear along an edge: one interval) and the arcs of the curve f_k = 0 inside R
+  // (a hyperbola's branches, each monotone), searched in one dimension by branch and bound.
+  // Returns false (nothing done) on a degenerate curve, where the caller refines instead.
+  bool crossed(const Piece& p, double s0, double t0, double s1, double t1) {
+    std::array<Bilinear, 4> fk{};
+    std::array<std::array<double, 4>, 4> fv{};
+    int n = 0;
+    for (double fx : {f_.x0, f_.x1})
+      for (double fy : {f_.y0, f_.y1}) {
+        const double dx = p.x0 - fx, dy = p.y0 - fy;
+        // 2 (a + e t)(dx + s / 2) + 2 (b + e s)(dy + t / 2)
+        const Bilinear q{2 * (p.a * dx + p.b * dy), p.a + 2 * p.e * dy, p.b + 2 * p.e * dx, 2 * p.e};
+        const std::array<double, 4> f = {q.at(s0, t0), q.at(s1, t0), q.at(s0, t1), q.at(s1, t1)};
+        if (!(std::min({f[0], f[1], f[2], f[3]}) < 0)) continue;  // D_k misses R (f_k bilinear: corners decide)
+        // The arcs first: a degenerate curve leaves the rectangle to the caller untouched.
+        if (!arcs(q, f, s0, t0, s1, t1, nullptr)) return false;
+        fk[static_cast<size_t>(n)] = q;
+        fv[static_cast<size_t>(n++)] = f;
+      }
+    for (int k = 0; k < n; ++k) {
+      const Bilinear& q = fk[static_cast<size_t>(k)];
+      const std::array<double, 4>& f = fv[static_cast<size_t>(k)];
+      edge_part(p, t0, s0, s1, f[0], f[1], true);
+      edge_part(p, t1, s0, s1, f[2], f[3], true);
+      edge_part(p, s0, t0, t1, f[0], f[2], false);
+      edge_part(p, s1, t0, t1, f[1], f[3], false);
+      arcs(q, f, s0, t0, s1, t1, &p);
+    }
+    return true;
+  }
+
+  // The part of an edge where f <= 0 (f linear along it, flo and fhi at its ends): its ends,
+  // and in the corner zone the edge's interior maximum (edge_maximum) when inside.
+  void edge_part(const Piece& p, double fixed, double lo, double hi, double flo, double fhi, bool along_x) {
+    if (flo > 0 && fhi > 0) return;
+    double a = lo, b = hi;
+    if (flo > 0) a = lo + (hi - lo) * (flo / (flo - fhi));
+    if (fhi > 0) b = lo + (hi - lo) * (flo / (flo - fhi));
+    a = std::clamp(a, lo, hi);
+    b = std::clamp(b, lo, hi);
+    for (double q : {a, b}) {
+      if (along_x) {
+        attain_closure(p, q, fixed);
+      } else {
+        attain_closure(p, fixed, q);
+      }
+    }
+    if (zx_ != 0 && zy_ != 0 && b > a) edge_maximum(p, fixed, a, b, along_x);
+  }
+
+  // The arcs of f = 0 inside [s0, s1] x [t0, t1] (f's corner values in fc): with p null,
+  // only whether they are well formed (each branch crosses the boundary twice); with p,
+  // each arc searched for psi's maximum.
+  bool arcs(const Bilinear& f, const std::array<double, 4>& fc, double s0, double t0, double s1, double t1, const Piece* p) {
+    // Where f = 0 on the boundary: sign changes along the edges, and corners where f = 0.
+    std::array<std::array<double, 2>, 8> at{};
+    int count = 0;
+    auto add = [&](double s, double t) {
+      for (int k = 0; k < count; ++k)
+        if (at[static_cast<size_t>(k)][0] == s && at[static_cast<size_t>(k)][1] == t) return;
+      if (count < 8) at[static_cast<size_t>(count)] = {s, t};
+      ++count;
+    };
+    const std::array<double, 4> ss = {s0, s1, s0, s1}, ts = {t0, t0, t1, t1};
+    for (int k = 0; k < 4; ++k)
+      if (fc[static_cast<size_t>(k)] == 0) add(ss[static_cast<size_t>(k)], ts[static_cast<size_t>(k)]);
+    auto edge = [&](int i, int j) {  // corners i and j, one edge
+      const double fi = fc[static_cast<size_t>(i)], fj = fc[static_cast<size_t>(j)];
+      if (!((fi < 0 && fj > 0) || (fi > 0 && fj < 0))) return;
+      const double r = fi / (fi - fj);
+      add(ss[static_cast<size_t>(i)] + r * (ss[static_cast<size_t>(j)] - ss[static_cast<size_t>(i)]),
+          ts[static_cast<size_t>(i)] + r * (ts[static_cast<size_t>(j)] - ts[static_cast<size_t>(i)]));
+    };
+    edge(0, 1);
+    edge(2, 3);
+    edge(0, 2);
+    edge(1, 3);
+    if (count == 0) return true;
+    // Branches: f = e (s - s*)(t - t*) + const with s* = -c / e; a branch keeps the sign of
+    // s - s* (a line when e = 0: one branch). Each must meet the boundary exactly twice.
+    std::array<int, 8> side{};
+    int minus = 0, plus = 0;
+    for (int k = 0; k < count && k < 8; ++k) {
+      int sgn = 1;
+      if (f.e != 0) {
+        const double d = at[static_cast<size_t>(k)][0] + f.c / f.e;
+        if (d == 0) return false;
+        sgn = d > 0 ? 1 : -1;
+      }
+      side[static_cast<size_t>(k)] = sgn;
+      (sgn > 0 ? plus : minus) += 1;
+    }
+    if (count > 4 || (minus != 0 && minus != 2) || (plus != 0 && plus != 2)) return false;
+    if (p == nullptr) return true;
+    for (int sgn : {-1, 1}) {
+      std::array<double, 4> arc{};
+      int got = 0;
+      for (int k = 0; k < count; ++k)
+        if (side[static_cast<size_t>(k)] == sgn) {
+          arc[static_cast<size_t>(2 * got)] = at[static_cast<size_t>(k)][0];
+          arc[static_cast<size_t>(2 * got + 1)] = at[static_cast<size_t>(k)][1];
+          ++got;
+        }
+      if (got == 2) search_arc(*p, f, arc);
+    }
+    return true;
+  }
+
+  // Branch and bound along one monotone arc of f = 0 between (arc[0], arc[1]) and (arc[2],
+  // arc[3]): the arc lies in the box of its ends, whose bound (side_upper / corner_upper)
+  // holds for it; boxes are halved along the arc until the bound is within the tolerance
+  // of a value attained on the arc.
+  void search_arc(const Piece& p, const Bilinear& f, const std::array<double, 4>& whole) {
+    attain_closure(p, whole[0], whole[1]);
+    attain_closure(p, whole[2], whole[3]);
+    struct Arc {
+      std::array<double, 4> e;
+      int depth;
+    };
+    std::array<Arc, 2 * kArcDepth + 2> stack{};
+    int top = 0;
+    stack[static_cast<size_t>(top++)] = {whole, 0};
+    while (top > 0) {
+      const Arc a = stack[static_cast<size_t>(--top)];
+      const double bs0 = std::min(a.e[0], a.e[2]), bs1 = std::max(a.e[0], a.e[2]);
+      const double bt0 = std::min(a.e[1], a.e[3]), bt1 = std::max(a.e[1], a.e[3]);
+      const std::array<double, 4> v = {p.value(bs0, bt0), p.value(bs1, bt0), p.value(bs0, bt1), p.value(bs1, bt1)};
+      if (std::max({v[0], v[1], v[2], v[3]}) <= top_) continue;
+      double upper, near;
+      if (zx_ == 0 || zy_ == 0) {
+        upper = side_upper(p, bs0, bt0, bs1, bt1, v);
+        near = std::min(distance(p.x(bs0), p.y(bt0)), distance(p.x(bs1), p.y(bt1)));  // dist is monotone across the box
+      } else {
+        const double vmax = std::max({v[0], v[1], v[2], v[3]});
+        near = nearest(p, bs0, bt0, bs1, bt1);
+        if (vmax - top_ <= level() * near) continue;
+        upper = corner_upper(p, bs0, bt0, bs1, bt1, v);
+      }
+      if (upper <= level()) continue;
+      // The arc's point halfway along its longer extent.
+      double sm, tm;
+      if (bs1 - bs0 >= bt1 - bt0) {
+        sm = 0.5 * (bs0 + bs1);
+        tm = std::clamp(-(f.a + f.b * sm) / (f.c + f.e * sm), bt0, bt1);
+      } else {
+        tm = 0.5 * (bt0 + bt1);
+        sm = std::clamp(-(f.a + f.c * tm) / (f.b + f.e * tm), bs0, bs1);
+      }
+      if (!std::isfinite(sm) || !std::isfinite(tm)) {
+        bound = std::max(bound, upper);
+        continue;
+      }
+      attain_closure(p, sm, tm);
+      // A box touching F's boundary (where the arc may end at a point with S = T) is left
+      // with its bound soon: there psi is homogeneous of degree 0 in the offset, so the
+      // bound of a box does not shrink with the box, and halving would go on to the cap.
+      if (upper <= std::max(psi * (1 + tol_), bound) || a.depth >= (near > 0 ? kArcDepth : max_depth_)) {
+        bound = std::max(bound, upper);
+        continue;
+      }
+      // The half nearer F last, so searched first: bounds grow toward F, and once the
+      // largest is kept the rest of the arc is dismissed against it.
+      const Arc first{{a.e[0], a.e[1], sm, tm}, a.depth + 1}, second{{sm, tm, a.e[2], a.e[3]}, a.depth + 1};
+      const bool first_nearer = distance(p.x(a.e[0]), p.y(a.e[1])) < distance(p.x(a.e[2]), p.y(a.e[3]));
+      stack[static_cast<size_t>(top++)] = first_nearer ? second : first;
+      stack[static_cast<size_t>(top++)] = first_nearer ? first : second;
+    }
   }
 
   Rect f_;
@@ -584,7 +835,342 @@ float round_up_half(float v) {
   return static_cast<float>(h);
 }
 
+// The planes and gradient boxes of leaf texels, which the tree does not store (7 floats a
+// texel), computed when first needed and kept in a small direct-mapped cache per task: the
+// searches of neighbouring blocks open mostly the same leaves. The same functions of the
+// same grid values, so what is cached is what would be computed again.
+class LeafCache {
+ public:
+  explicit LeafCache(const HalfGrid& grid) : grid_(grid), entries_(kSide * kSide) {}
+  const float* plane(int x, int y) {
+    Entry& e = at(x, y);
+    if (!e.has_plane) texel_plane(grid_, x, y, e.plane.data());
+    e.has_plane = true;
+    return e.plane.data();
+  }
+  const float* box(int x, int y) {
+    Entry& e = at(x, y);
+    if (!e.has_box) texel_gradients(grid_, x, y, e.box.data());
+    e.has_box = true;
+    return e.box.data();
+  }
+
+ private:
+  static constexpr int kSide = 64;
+  struct Entry {
+    int x = -1, y = -1;
+    bool has_plane = false, has_box = false;
+    std::array<float, 3> plane{};
+    std::array<float, 4> box{};
+  };
+  Entry& at(int x, int y) {
+    Entry& e = entries_[static_cast<size_t>((y % kSide) * kSide + x % kSide)];
+    if (e.x != x || e.y != y) e = Entry{x, y};
+    return e;
+  }
+  const HalfGrid& grid_;
+  std::vector<Entry> entries_;
+};
+
+// Texels are searched kBlock x kBlock at a time: one walk of the quadtree serves the block,
+// each node carrying the set of the block's texels (a bit mask) for which it may still hold
+// a steeper point. What a per-texel search re-did for every texel (the descent from the
+// root, popping, sorting and pushing nodes, the children's rectangles and gaps) is done once
+// per block; the tests that decide (a node's maximum over its distance, its plane, its
+// gradient box, the pieces) stay per texel, so each texel's answer is still the exact
+// supremum of its own cone within the tolerance. The result depends on the blocks (the
+// order in which each texel meets the nodes, within the tolerance) but not on the threads.
+// Measured (callgrind, the 256² maps of bench/cone_time): 2 x 2 texels cost 6-11 % more
+// (less is shared), 8 x 8 20-60 % more (each texel meets far nodes before its near ones).
+constexpr int kBlockLog = 2;
+constexpr int kBlock = 1 << kBlockLog;  // texel k of a block: column k % kBlock, row k / kBlock
+using Mask = uint32_t;
+static_assert(kBlock * kBlock <= 32, "one bit per texel of a block");
+
+struct Block {
+  int i0 = 0, j0 = 0, bw = 0, bh = 0;  // texels [i0, i0 + bw) x [j0, j0 + bh)
+  Rect f{};                            // the union of their footprints
+};
+
+inline int low_bit(Mask m) { return __builtin_ctz(m); }
+// The bits of a block's column 0 and row 0.
+constexpr Mask kColumn = [] {
+  Mask m = 0;
+  for (int r = 0; r < kBlock; ++r) m |= Mask{1} << (r * kBlock);
+  return m;
+}();
+constexpr Mask kRow = (Mask{1} << kBlock) - 1;
+// A texel's 8 neighbours, the sides first.
+constexpr std::array<std::pair<int, int>, 8> kNeighbours = {{{-1, 0}, {1, 0}, {0, -1}, {0, 1}, {-1, -1}, {1, -1}, {-1, 1}, {1, 1}}};
+
+class BlockSearch {
+ public:
+  using PerTexel = std::array<double, kBlock * kBlock>;
+
+  BlockSearch(const MaxTree& tree, const HalfGrid& grid, int w, int h, bool wrap, double tolerance)
+      : tree_(tree), grid_(grid), w_(w), h_(h), wrap_(wrap), tol_(tolerance), root_(static_cast<int>(tree.level.size()) - 1),
+        global_max_(tree.at(root_, 0, 0)), leaves_(grid) {}
+
+  // Searches the texels of `todo` in block b (apex heights `top`), of one kind, each seeded
+  // with every point of `seeds`; texel k stops once its psi reaches cap[k] (the caller needs
+  // only min(cap, supremum)). The searches are left in s (indexed by k).
+  void run(const Block& b, const PerTexel& top, bool relaxed, Mask todo, const PerTexel& cap, const std::vector<ConeSearch::Point>& seeds,
+           std::vector<ConeSearch>& s) {
+    s.clear();
+    for (int k = 0; k < kBlock * kBlock; ++k) {
+      const int i = b.i0 + (k & (kBlock - 1)), j = b.j0 + (k >> kBlockLog);
+      footprint_[static_cast<size_t>(k)] = Rect{static_cast<double>(i), static_cast<double>(j), i + 1.0, j + 1.0};
+      s.emplace_back(footprint_[static_cast<size_t>(k)], top[static_cast<size_t>(k)], relaxed, tol_);
+    }
+    relaxed_ = relaxed;
+    live_ = 0;
+    for (Mask q = todo; q != 0; q &= q - 1) {
+      const size_t k = static_cast<size_t>(low_bit(q));
+      for (const ConeSearch::Point& p : seeds) s[k].seed(p);
+      if (s[k].psi < cap[k]) live_ |= Mask{1} << k;
+    }
+    // First each texel's own neighbourhood (the 8 texels around it): they touch F, so no
+    // bound dismisses them and they are searched whatever the order; searched first, they
+    // give each texel a slope close to its answer before the walk (its steepest point is
+    // most often next to it), so that the walk's tests dismiss more. The walk then skips them.
+    near_ = true;
+    for (Mask q = live_; q != 0; q &= q - 1) {
+      const int k = low_bit(q);
+      const size_t uk = static_cast<size_t>(k);
+      const int i = b.i0 + (k & (kBlock - 1)), j = b.j0 + (k >> kBlockLog);
+      for (const auto& [dx, dy] : kNeighbours) {
+        const int x = i + dx, y = j + dy;
+        if (x < 0 || y < 0 || x >= w_ || y >= h_ || !(tree_.at(0, x, y) > top[uk]) || !(s[uk].psi < cap[uk])) continue;
+        if (relaxed && rises_away(leaves_.box(x, y), Rect{static_cast<double>(x), static_cast<double>(y), x + 1.0, y + 1.0}, footprint_[uk])) continue;
+        for (int bb = 2 * y; bb <= 2 * y + 1; ++bb)
+          for (int a = 2 * x; a <= 2 * x + 1; ++a) s[uk].piece(piece(0, 0, a, bb));
+      }
+      if (!(s[uk].psi < cap[uk])) live_ &= ~(Mask{1} << k);
+    }
+    visit(b, top, cap, s, 0, 0, live_);
+    near_ = false;
+    if (wrap_) {
+      // Copies of the tile: none farther than (global max - T) / level can hold a steeper
+      // point. A texel with nothing higher in the tile has nothing higher in any copy.
+      Mask seen = 0;
+      double reach = 0;
+      for (Mask q = live_; q != 0; q &= q - 1) {
+        const size_t k = static_cast<size_t>(low_bit(q));
+        const double level = s[k].level();
+        if (level <= 0) continue;
+        seen |= Mask{1} << k;
+        reach = std::max(reach, (global_max_ - top[k]) / level);
+      }
+      if (seen != 0) {
+        const int ax = static_cast<int>(std::ceil(reach / w_)) + 1, ay = static_cast<int>(std::ceil(reach / h_)) + 1;
+        for (int bb = -ay; bb <= ay; ++bb)
+          for (int a = -ax; a <= ax; ++a)
+            if (a != 0 || bb != 0) visit(b, top, cap, s, static_cast<double>(a) * w_, static_cast<double>(bb) * h_, seen);
+      }
+    }
+  }
+
+ private:
+  struct Node {
+    int level, x, y;
+    float m;    // the node's maximum
+    Mask mask;  // the block's texels for which it may hold a steeper point
+    double d;   // distance to the block's footprint
+  };
+
+  // Under the cone of the slope found: nothing to gain. Under the cone of that slope
+  // widened by the tolerance: the node is dismissed and the widened slope kept as the
+  // bound (the stored cone may be that much narrower, never wider).
+  bool under(ConeSearch& s, const float* plane, const Rect& r, const Rect& f, double t) const {
+    if (plane_excess(plane, r, f, t, s.level()) <= 0) return true;
+    const double widened = s.psi * (1 + tol_);
+    if (widened > s.bound && plane_excess(plane, r, f, t, widened) <= 0) {
+      s.bound = std::max(s.bound, widened);
+      return true;
+    }
+    return false;
+  }
+
+  // The plane test of a node (or leaf) for the texels of `keep`; those apart from it
+  // (`apart`, d > 0; plane_excess needs r outside the footprint) may be dropped. Returns the
+  // texels left. (A first test for the whole block, with its union footprint, lowest apex and
+  // lowest slope, dismissed 4 % of the nodes it was tried on and cost more than it saved.)
+  Mask planes(const float* plane, const Rect& r, const PerTexel& top, std::vector<ConeSearch>& s, Mask keep, Mask apart) {
+    if (apart == 0) return keep;
+    for (Mask q = keep & apart; q != 0; q &= q - 1) {
+      const size_t k = static_cast<size_t>(low_bit(q));
+      if (under(s[k], plane, r, footprint_[k], top[k])) keep &= ~(Mask{1} << k);
+    }
+    return keep;
+  }
+
+  // Relaxed cones: drop the texels that see no point of r descend. Once for the block first
+  // (no point descends as seen from F_B: then from no F_p inside it either).
+  Mask rising(const float* box, const Rect& r, const Block& b, Mask keep) const {
+    if ((keep & (keep - 1)) != 0 && rises_away(box, r, b.f)) return 0;
+    for (Mask q = keep; q != 0; q &= q - 1) {
+      const size_t k = static_cast<size_t>(low_bit(q));
+      if (rises_away(box, r, footprint_[k])) keep &= ~(Mask{1} << k);
+    }
+    return keep;
+  }
+
+  // Depth-first over one copy of the map shifted by (ox, oy) pixels, nearest child (to the
+  // block) first.
+  void visit(const Block& b, const PerTexel& top, const PerTexel& cap, std::vector<ConeSearch>& s, double ox, double oy, Mask mask0) {
+    stack_.clear();
+    stack_.push_back({root_, 0, 0, static_cast<float>(global_max_), mask0, rect_distance(Rect{ox, oy, ox + w_, oy + h_}, b.f)});
+    std::array<double, kBlock> gx2{}, gy2{};
+    PerTexel level{}, level2{};
+    while (!stack_.empty() && live_ != 0) {
+      const Node n = stack_.back();
+      stack_.pop_back();
+      Mask keep = 0, apart = 0;
+      const double m = n.m;
+      const int size = 1 << n.level;
+      const Rect r{ox + static_cast<double>(n.x) * size, oy + static_cast<double>(n.y) * size,
+                   ox + std::min(static_cast<double>(n.x + 1) * size, static_cast<double>(w_)),
+                   oy + std::min(static_cast<double>(n.y + 1) * size, static_cast<double>(h_))};
+      const double size2 = static_cast<double>(size) * size;
+      // Squared gaps from each column and row of the block's texels to the node.
+      for (int c = 0; c < b.bw; ++c) {
+        const double gp = gap(b.i0 + c, b.i0 + c + 1.0, r.x0, r.x1);
+        gx2[static_cast<size_t>(c)] = gp * gp;
+      }
+      for (int c = 0; c < b.bh; ++c) {
+        const double gp = gap(b.j0 + c, b.j0 + c + 1.0, r.y0, r.y1);
+        gy2[static_cast<size_t>(c)] = gp * gp;
+      }
+      // A node no higher than the apex, or whose maximum over its nearest distance is no
+      // steeper than the slope already found (the value returned, level()), cannot change
+      // that texel's answer: (m - T) <= level d, squared (both sides >= 0).
+      for (Mask q = n.mask & live_; q != 0; q &= q - 1) {
+        const int k = low_bit(q);
+        const size_t uk = static_cast<size_t>(k);
+        const double e = m - top[uk];
+        if (e <= 0) continue;
+        const double d2 = gx2[static_cast<size_t>(k & (kBlock - 1))] + gy2[static_cast<size_t>(k >> kBlockLog)];
+        level[uk] = s[uk].level();
+        level2[uk] = level[uk] * level[uk];
+        if (d2 > 0) {
+          if (e * e <= level2[uk] * d2) continue;
+          // The plane test only for nodes no larger than their distance: closer, the cone's
+          // distance term bends across the node and the test almost never dismisses it
+          // (measured on the bricks at 256²: 3 % of the tests at 8 texels, none above; a test
+          // costs ~300 instructions). Only a prune is skipped, never a point counted.
+          if (size2 <= d2) apart |= Mask{1} << k;
+        }
+        keep |= Mask{1} << k;
+      }
+      if (keep == 0) continue;
+      if (n.level > 0) {
+        const size_t index = tree_.index(n.level, n.x, n.y);
+        keep = planes(&tree_.plane[static_cast<size_t>(n.level)][index * 3], r, top, s, keep, apart);
+        if (keep != 0 && relaxed_) keep = rising(&tree_.gradient[static_cast<size_t>(n.level)][index * 4], r, b, keep);
+        if (keep == 0) continue;
+      } else {
+        if (near_) {
+          // The texels whose neighbourhood holds this leaf have searched it already.
+          const int c = n.x - b.i0, rr = n.y - b.j0;
+          Mask cols = 0, rows = 0;
+          for (int u = std::max(c - 1, 0); u <= std::min(c + 1, kBlock - 1); ++u) cols |= kColumn << u;
+          for (int u = std::max(rr - 1, 0); u <= std::min(rr + 1, kBlock - 1); ++u) rows |= kRow << (u * kBlock);
+          keep &= ~(cols & rows);
+          apart &= keep;
+          if (keep == 0) continue;
+        }
+        if (apart != 0) keep = planes(leaves_.plane(n.x, n.y), r, top, s, keep, apart);
+        if (keep != 0 && relaxed_) keep = rising(leaves_.box(n.x, n.y), r, b, keep);
+        if (keep == 0) continue;
+        std::array<Piece, 4> pieces = {piece(ox, oy, 2 * n.x, 2 * n.y), piece(ox, oy, 2 * n.x + 1, 2 * n.y), piece(ox, oy, 2 * n.x, 2 * n.y + 1),
+                                       piece(ox, oy, 2 * n.x + 1, 2 * n.y + 1)};
+        for (Mask q = keep; q != 0; q &= q - 1) {
+          const size_t k = static_cast<size_t>(low_bit(q));
+          for (const Piece& p : pieces) s[k].piece(p);
+          if (!(s[k].psi < cap[k])) live_ &= ~(Mask{1} << k);
+        }
+        continue;
+      }
+      // The children, each with the texels for which the test above would not skip it when
+      // popped (the level only grows until then, and the test is repeated there).
+      std::array<Node, 4> kids;
+      int count = 0;
+      const int l = n.level - 1;
+      const int cs = 1 << l, kw = tree_.w[static_cast<size_t>(l)], kh = tree_.h[static_cast<size_t>(l)];
+      const float* kid_max = tree_.level[static_cast<size_t>(l)].data();
+      const int cx0 = 2 * n.x, cx1 = std::min(2 * n.x + 1, kw - 1), cy0 = 2 * n.y, cy1 = std::min(2 * n.y + 1, kh - 1);
+      std::array<std::array<double, kBlock>, 2> kgx2{}, kgy2{};
+      std::array<double, 2> bgx{}, bgy{};  // gaps to the block's footprint
+      for (int cx = cx0; cx <= cx1; ++cx) {
+        const double x0 = ox + static_cast<double>(cx) * cs, x1 = ox + std::min(static_cast<double>(cx + 1) * cs, static_cast<double>(w_));
+        const size_t u = static_cast<size_t>(cx - cx0);
+        for (int c = 0; c < b.bw; ++c) {
+          const double gp = gap(b.i0 + c, b.i0 + c + 1.0, x0, x1);
+          kgx2[u][static_cast<size_t>(c)] = gp * gp;
+        }
+        bgx[u] = gap(b.f.x0, b.f.x1, x0, x1);
+      }
+      for (int cy = cy0; cy <= cy1; ++cy) {
+        const double y0 = oy + static_cast<double>(cy) * cs, y1 = oy + std::min(static_cast<double>(cy + 1) * cs, static_cast<double>(h_));
+        const size_t u = static_cast<size_t>(cy - cy0);
+        for (int c = 0; c < b.bh; ++c) {
+          const double gp = gap(b.j0 + c, b.j0 + c + 1.0, y0, y1);
+          kgy2[u][static_cast<size_t>(c)] = gp * gp;
+        }
+        bgy[u] = gap(b.f.y0, b.f.y1, y0, y1);
+      }
+      for (int cy = cy0; cy <= cy1; ++cy)
+        for (int cx = cx0; cx <= cx1; ++cx) {
+          const float km = kid_max[static_cast<size_t>(cy) * static_cast<size_t>(kw) + static_cast<size_t>(cx)];
+          const auto& ggx = kgx2[static_cast<size_t>(cx - cx0)];
+          const auto& ggy = kgy2[static_cast<size_t>(cy - cy0)];
+          Mask kid = 0;
+          for (Mask q = keep; q != 0; q &= q - 1) {
+            const int k = low_bit(q);
+            const double e = km - top[static_cast<size_t>(k)];
+            if (e <= 0) continue;
+            const double d2 = ggx[static_cast<size_t>(k & (kBlock - 1))] + ggy[static_cast<size_t>(k >> kBlockLog)];
+            if (d2 > 0 && e * e <= level2[static_cast<size_t>(k)] * d2) continue;
+            kid |= Mask{1} << k;
+          }
+          if (kid != 0) kids[static_cast<size_t>(count++)] = Node{l, cx, cy, km, kid, length(bgx[static_cast<size_t>(cx - cx0)], bgy[static_cast<size_t>(cy - cy0)])};
+        }
+      // Farthest pushed first, so the nearest is searched first (insertion sort of <= 4).
+      for (int a = 1; a < count; ++a)
+        for (int c = a; c > 0 && kids[static_cast<size_t>(c - 1)].d < kids[static_cast<size_t>(c)].d; --c)
+          std::swap(kids[static_cast<size_t>(c - 1)], kids[static_cast<size_t>(c)]);
+      for (int k = 0; k < count; ++k) stack_.push_back(kids[static_cast<size_t>(k)]);
+    }
+  }
+
+  Piece piece(double ox, double oy, int a, int b) const {
+    return Piece(ox + 0.5 * a, oy + 0.5 * b, grid_.at(a, b), grid_.at(a + 1, b), grid_.at(a, b + 1), grid_.at(a + 1, b + 1));
+  }
+
+  const MaxTree& tree_;
+  const HalfGrid& grid_;
+  int w_, h_;
+  bool wrap_;
+  double tol_;
+  int root_;
+  double global_max_;
+  LeafCache leaves_;
+  bool relaxed_ = false;
+  bool near_ = false;  // visiting the map itself (not a copy): the neighbourhoods are searched
+  Mask live_ = 0;  // texels still searching (psi below their cap)
+  std::array<Rect, kBlock * kBlock> footprint_{};
+  std::vector<Node> stack_;
+};
+
 }  // namespace
+
+// A seed for the next block, once: neighbouring texels often share their steepest point.
+void add_seed(std::vector<ConeSearch::Point>& seeds, const ConeSearch::Point& p) {
+  if (!p.valid) return;
+  for (const ConeSearch::Point& q : seeds)
+    if (q.x == p.x && q.y == p.y) return;
+  seeds.push_back(p);
+}
 
 Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
   HeightField field = input;
@@ -592,166 +1178,85 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
     for (float& v : field.height.pixels) v = static_cast<float>(Imath::half(v));
   const int w = field.height.width, h = field.height.height;
   const HalfGrid g = half_grid(field);
-  std::vector<float> top(static_cast<size_t>(w) * static_cast<size_t>(h));
+  std::vector<float> texel_top(static_cast<size_t>(w) * static_cast<size_t>(h));
   for (int j = 0; j < h; ++j)
     for (int i = 0; i < w; ++i) {
       float m = -1.0f;
       for (int b = 2 * j; b <= 2 * j + 2; ++b)
         for (int a = 2 * i; a <= 2 * i + 2; ++a) m = std::max(m, g.at(a, b));
-      top[static_cast<size_t>(j) * static_cast<size_t>(w) + static_cast<size_t>(i)] = m;
+      texel_top[static_cast<size_t>(j) * static_cast<size_t>(w) + static_cast<size_t>(i)] = m;
     }
-  const MaxTree tree = max_tree(std::move(top), g, w, h);
+  const MaxTree tree = max_tree(std::move(texel_top), g, w, h);
   const std::vector<float>& apex = tree.level[0];
-  const int root = static_cast<int>(tree.level.size()) - 1;
-  const double global_max = tree.at(root, 0, 0);
   const bool relaxed = o.kind == ConeKind::relaxed;
 
   Image out(w, h, 3);
-  tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {
-    struct Node {
-      int level, x, y;
-      float m;   // the node's maximum
-      double d;  // distance to the footprint, computed once when the node is pushed
-    };
-    std::vector<Node> stack;
-    // The planes and gradient boxes of leaf texels, which the tree does not store (7 floats
-    // a texel), computed when first needed and kept in a small direct-mapped cache: the
-    // searches of neighbouring texels open mostly the same leaves. The same functions of the
-    // same grid values, so what is cached is what would be computed again.
-    struct LeafBounds {
-      int x = -1, y = -1;
-      bool has_plane = false, has_box = false;
-      std::array<float, 3> plane{};
-      std::array<float, 4> box{};
-    };
-    constexpr int kCacheSide = 64;
-    std::vector<LeafBounds> leaf_cache(kCacheSide * kCacheSide);
-    auto leaf = [&](int x, int y) -> LeafBounds& {
-      LeafBounds& e = leaf_cache[static_cast<size_t>((y % kCacheSide) * kCacheSide + x % kCacheSide)];
-      if (e.x != x || e.y != y) e = LeafBounds{x, y};
-      return e;
-    };
-    for (int j = rows.begin(); j < rows.end(); ++j) {
-      // Seeds chain along a row only, so results never depend on how rows are split among
-      // threads.
-      ConeSearch::Point previous_conservative, previous_relaxed;
-      for (int i = 0; i < w; ++i) {
-        const double t = apex[static_cast<size_t>(j) * static_cast<size_t>(w) + static_cast<size_t>(i)];
-        const Rect f{static_cast<double>(i), static_cast<double>(j), i + 1.0, j + 1.0};
-        // One search: the supremum of the slope (relaxed: over points seen descending),
-        // seeded with the steepest point of the texel before it in this row. It stops once
-        // a slope of `cap` is attained: the caller only needs min(cap, supremum).
-        auto search_texel = [&](bool relaxed_kind, ConeSearch::Point& previous, double cap) {
-        ConeSearch search(f, t, relaxed_kind, o.tolerance);
-        search.seed(previous);
-        // Depth-first over one copy of the map shifted by (ox, oy) pixels, nearest child
-        // first; a node whose maximum cannot beat the slope attained so far is skipped.
-        auto visit = [&](double ox, double oy) {
-          stack.clear();
-          stack.push_back({root, 0, 0, static_cast<float>(global_max), rect_distance(Rect{ox, oy, ox + w, oy + h}, f)});
-          while (!stack.empty() && search.psi < cap) {
-            const Node n = stack.back();
-            stack.pop_back();
-            const double m = n.m;
-            if (m <= t) continue;
-            const int size = 1 << n.level;
-            const Rect r{ox + static_cast<double>(n.x) * size, oy + static_cast<double>(n.y) * size,
-                         ox + std::min(static_cast<double>(n.x + 1) * size, static_cast<double>(w)),
-                         oy + std::min(static_cast<double>(n.y + 1) * size, static_cast<double>(h))};
-            const double d = n.d;
-            if (d > 0 && (m - t) / d <= search.level()) continue;
-            // Under the cone of the slope found: nothing to gain. Under the cone of that slope
-            // widened by the tolerance: the node is dismissed and the widened slope kept as
-            // the bound (the stored cone may be that much narrower, never wider).
-            auto under = [&](const float* plane) {
-              if (plane_excess(plane, r, f, t, search.level()) <= 0) return true;
-              const double widened = search.psi * (1 + o.tolerance);
-              if (widened > search.bound && plane_excess(plane, r, f, t, widened) <= 0) {
-                search.bound = std::max(search.bound, widened);
-                return true;
-              }
-              return false;
-            };
-            if (d > 0 && n.level > 0 && under(&tree.plane[static_cast<size_t>(n.level)][tree.index(n.level, n.x, n.y) * 3])) continue;
-            if (relaxed_kind && n.level > 0 && rises_away(&tree.gradient[static_cast<size_t>(n.level)][tree.index(n.level, n.x, n.y) * 4], r, f))
-              continue;
-            if (n.level == 0) {
-              if (d > 0) {  // as for larger nodes, the plane is tested only apart from F
-                LeafBounds& e = leaf(n.x, n.y);
-                if (!e.has_plane) texel_plane(g, n.x, n.y, e.plane.data());
-                e.has_plane = true;
-                if (under(e.plane.data())) continue;
-              }
-              if (relaxed_kind) {
-                LeafBounds& e = leaf(n.x, n.y);
-                if (!e.has_box) texel_gradients(g, n.x, n.y, e.box.data());
-                e.has_box = true;
-                if (rises_away(e.box.data(), r, f)) continue;
-              }
-              for (int b = 2 * n.y; b <= 2 * n.y + 1; ++b)
-                for (int a = 2 * n.x; a <= 2 * n.x + 1; ++a)
-                  search.piece(Piece(ox + 0.5 * a, oy + 0.5 * b, g.at(a, b), g.at(a + 1, b), g.at(a, b + 1), g.at(a + 1, b + 1)));
-              continue;
-            }
-            std::array<Node, 4> kids;
-            int count = 0;
-            const int l = n.level - 1;
-            const int cs = 1 << l, kw = tree.w[static_cast<size_t>(l)], kh = tree.h[static_cast<size_t>(l)];
-            const float* kid_max = tree.level[static_cast<size_t>(l)].data();
-            // The children's gaps to F along each axis, shared by the children in a column or row.
-            const int cx0 = 2 * n.x, cx1 = std::min(2 * n.x + 1, kw - 1), cy0 = 2 * n.y, cy1 = std::min(2 * n.y + 1, kh - 1);
-            std::array<double, 2> gap_x{}, gap_y{};
-            for (int cx = cx0; cx <= cx1; ++cx)
-              gap_x[static_cast<size_t>(cx - cx0)] =
-                  gap(f.x0, f.x1, ox + static_cast<double>(cx) * cs, ox + std::min(static_cast<double>(cx + 1) * cs, static_cast<double>(w)));
-            for (int cy = cy0; cy <= cy1; ++cy)
-              gap_y[static_cast<size_t>(cy - cy0)] =
-                  gap(f.y0, f.y1, oy + static_cast<double>(cy) * cs, oy + std::min(static_cast<double>(cy + 1) * cs, static_cast<double>(h)));
-            for (int cy = cy0; cy <= cy1; ++cy)
-              for (int cx = cx0; cx <= cx1; ++cx) {
-                // A child that the two tests at the top of this loop would skip when popped is
-                // not pushed: neither test changes the search, and the level they compare
-                // against only grows until then. The sort below is stable, so the children
-                // pushed keep their order, and the search takes the same steps.
-                const float km = kid_max[static_cast<size_t>(cy) * static_cast<size_t>(kw) + static_cast<size_t>(cx)];
-                if (km <= t) continue;
-                const double kd = length(gap_x[static_cast<size_t>(cx - cx0)], gap_y[static_cast<size_t>(cy - cy0)]);  // as rect_distance
-                if (kd > 0 && (km - t) / kd <= search.level()) continue;
-                kids[static_cast<size_t>(count++)] = Node{l, cx, cy, km, kd};
-              }
-            // Farthest pushed first, so the nearest is searched first (insertion sort of <= 4).
-            for (int a = 1; a < count; ++a)
-              for (int b = a; b > 0 && kids[static_cast<size_t>(b - 1)].d < kids[static_cast<size_t>(b)].d; --b)
-                std::swap(kids[static_cast<size_t>(b - 1)], kids[static_cast<size_t>(b)]);
-            for (int k = 0; k < count; ++k) stack.push_back(kids[static_cast<size_t>(k)]);
+  const int blocks_x = (w + kBlock - 1) / kBlock, blocks_y = (h + kBlock - 1) / kBlock;
+  // Rows of blocks in parallel; within a row, blocks in order, each seeded with the steepest
+  // points of the block before it (seeds chain along a row of blocks only, so results never
+  // depend on how rows are split among threads).
+  tbb::parallel_for(tbb::blocked_range<int>(0, blocks_y), [&](const tbb::blocked_range<int>& rows) {
+    BlockSearch walk(tree, g, w, h, field.border == Border::wrap, o.tolerance);
+    std::vector<ConeSearch> searches, fallback;
+    std::vector<ConeSearch::Point> seeds_conservative, seeds_relaxed, seeds;
+    for (int bj = rows.begin(); bj < rows.end(); ++bj) {
+      seeds_conservative.clear();
+      seeds_relaxed.clear();
+      for (int bi = 0; bi < blocks_x; ++bi) {
+        Block b;
+        b.i0 = bi * kBlock;
+        b.j0 = bj * kBlock;
+        b.bw = std::min(kBlock, w - b.i0);
+        b.bh = std::min(kBlock, h - b.j0);
+        b.f = Rect{static_cast<double>(b.i0), static_cast<double>(b.j0), static_cast<double>(b.i0 + b.bw), static_cast<double>(b.j0 + b.bh)};
+        BlockSearch::PerTexel top{}, cap{}, psi{};
+        Mask all = 0;
+        for (int y = 0; y < b.bh; ++y)
+          for (int x = 0; x < b.bw; ++x) {
+            const size_t k = static_cast<size_t>(y * kBlock + x);
+            top[k] = apex[static_cast<size_t>(b.j0 + y) * static_cast<size_t>(w) + static_cast<size_t>(b.i0 + x)];
+            cap[k] = kInf;
+            all |= Mask{1} << k;
           }
-        };
-        visit(0, 0);
-        if (field.border == Border::wrap && search.level() > 0) {
-          // Copies of the tile: none farther than (global max - T) / level can hold a steeper point.
-          const double reach = (global_max - t) / search.level();
-          const int ax = static_cast<int>(std::ceil(reach / w)) + 1, ay = static_cast<int>(std::ceil(reach / h)) + 1;
-          for (int b = -ay; b <= ay; ++b)
-            for (int a = -ax; a <= ax; ++a) {
-              if (a == 0 && b == 0) continue;
-              const Rect r{static_cast<double>(a) * w, static_cast<double>(b) * h, (a + 1.0) * w, (b + 1.0) * h};
-              const double d = rect_distance(r, f);
-              if (d > 0 && (global_max - t) / d <= search.level()) continue;
-              visit(static_cast<double>(a) * w, static_cast<double>(b) * h);
-            }
+        // One search per texel: the supremum of the slope (relaxed: over points seen
+        // descending).
+        walk.run(b, top, relaxed, all, cap, relaxed ? seeds_relaxed : seeds_conservative, searches);
+        std::vector<ConeSearch::Point>& next = relaxed ? seeds_relaxed : seeds_conservative;
+        next.clear();
+        Mask loose = 0;
+        for (Mask q = all; q != 0; q &= q - 1) {
+          const size_t k = static_cast<size_t>(low_bit(q));
+          psi[k] = searches[k].level();
+          add_seed(next, searches[k].best);
+          // A relaxed cone is never narrower than the conservative one (which satisfies the
+          // relaxed condition too); where the relaxed search kept a loose bound (near a fan)
+          // the conservative search decides, up to the relaxed bound.
+          if (relaxed && searches[k].bound > searches[k].psi * (1 + o.tolerance)) {
+            loose |= Mask{1} << k;
+            cap[k] = psi[k];
+          }
         }
-        previous = search.best;
-        return std::pair{search.level(), search.bound > search.psi * (1 + o.tolerance)};
-        };
-        auto [psi, loose] = search_texel(relaxed, relaxed ? previous_relaxed : previous_conservative, kInf);
-        // A relaxed cone is never narrower than the conservative one (which satisfies the
-        // relaxed condition too); where the relaxed search kept a loose bound (near a fan)
-        // the conservative search decides.
-        if (relaxed && loose) psi = std::min(psi, search_texel(false, previous_conservative, psi).first);
-        const double ratio = psi > 0 ? 1.0 / (psi * w) : kInf;  // texels -> units of u
-        out.at(i, j, 0) = field.height.at(i, j);
-        out.at(i, j, 1) = round_down(std::min(ratio, static_cast<double>(kConeRatioCap)), o.half);
-        out.at(i, j, 2) = o.half ? round_up_half(static_cast<float>(t)) : static_cast<float>(t);
+        if (loose != 0) {
+          seeds = seeds_conservative;
+          seeds.insert(seeds.end(), seeds_relaxed.begin(), seeds_relaxed.end());  // points above T either way
+          walk.run(b, top, false, loose, cap, seeds, fallback);
+          seeds_conservative.clear();
+          for (Mask q = loose; q != 0; q &= q - 1) {
+            const size_t k = static_cast<size_t>(low_bit(q));
+            psi[k] = std::min(psi[k], fallback[k].level());
+            add_seed(seeds_conservative, fallback[k].best);
+          }
+        }
+        for (Mask q = all; q != 0; q &= q - 1) {
+          const int k = low_bit(q);
+          const int i = b.i0 + (k & (kBlock - 1)), j = b.j0 + (k >> kBlockLog);
+          const double p = psi[static_cast<size_t>(k)];
+          const double ratio = p > 0 ? 1.0 / (p * w) : kInf;  // texels -> units of u
+          out.at(i, j, 0) = field.height.at(i, j);
+          out.at(i, j, 1) = round_down(std::min(ratio, static_cast<double>(kConeRatioCap)), o.half);
+          const double t = top[static_cast<size_t>(k)];
+          out.at(i, j, 2) = o.half ? round_up_half(static_cast<float>(t)) : static_cast<float>(t);
+        }
       }
     }
   });

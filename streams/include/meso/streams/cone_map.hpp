@@ -38,9 +38,20 @@
 // branch and bound. Side pieces (beside the footprint) are exact at their corners. Corner
 // pieces are exact on their boundary (closed-form maxima along the edges) unless the piece's
 // polynomial is concave along the rays out of F's corner, where they are refined until the
-// bound is within `tolerance` (relative) of a value attained.
-// The stored ratio is always <= the exact one (safe) and >= exact / (1 + tolerance). A texel
-// no higher point can see (the top of the map, a flat map) stores kConeRatioCap.
+// bound is within `tolerance` (relative) of a value attained. For relaxed cones, a piece the
+// edge of the descending set crosses is settled on that edge (arcs of a hyperbola, searched
+// in one dimension to the tolerance) and on the piece's edges.
+// The stored ratio is always <= the exact one (safe) and, except where noted below, >= exact /
+// (1 + tolerance). Relaxed cones may keep a looser bound (still safe) where no exact treatment
+// applies: where the apex height is reached on F's boundary and the descending set fans out of
+// that point, and on corner pieces concave along the rays (refined to a fixed depth); there the
+// conservative cone, never narrower, is searched as well and the wider of the two kept. A
+// texel no higher point can see (the top of the map, a flat map) stores kConeRatioCap.
+//
+// Determinism. Texels are searched in fixed 4 x 4 blocks, each seeded from the block before it
+// in its row of blocks: the output is the same, byte for byte, whatever the thread count. Within
+// the tolerance it depends on the search order, so it may change (within the tolerance, never
+// wider than exact) when the search changes.
 #pragma once
 
 #include "meso/streams/height_field.hpp"
