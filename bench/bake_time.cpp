@@ -6,8 +6,10 @@
 // Prints one JSON object: the best and the median of REPEATS (default 3) runs of bake() at
 // SIZE x SIZE with 1 sample and the default maps (displacement, tangent- and object-space
 // normals, coverage and the dilation are all part of bake()), texels, rays/s (2 rays per
-// covered texel). Threads: TBB's default (limit it with taskset, as the script does, or
-// run on a machine of that size).
+// covered texel), and the median process CPU time per call (user + system, all threads, in
+// seconds: on a machine shared with other jobs it moves less than the wall time, which
+// waits for the cores). Threads: TBB's default (limit it with taskset, as the script does,
+// or run on a machine of that size).
 #include "meso/bake/bake.hpp"
 #include "meso/core/error.hpp"
 #include "meso/formats/mesh_io.hpp"
@@ -17,6 +19,20 @@
 #include <cstdio>
 #include <cstdlib>
 #include <vector>
+
+#include <sys/resource.h>
+
+namespace {
+
+// User plus system CPU time of the whole process so far, in seconds.
+double process_cpu_seconds() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  auto s = [](const timeval& t) { return static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_usec); };
+  return s(u.ru_utime) + s(u.ru_stime);
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   if (argc < 6) {
@@ -31,19 +47,22 @@ int main(int argc, char** argv) {
     o.front = static_cast<float>(std::atof(argv[4]));
     o.back = static_cast<float>(std::atof(argv[5]));
     const int repeats = argc > 6 ? std::max(1, std::atoi(argv[6])) : 3;
-    std::vector<double> seconds;
+    std::vector<double> seconds, cpu;
     size_t covered = 0, hits = 0;
     for (int i = 0; i < repeats; ++i) {
+      const double c0 = process_cpu_seconds();
       const auto t0 = std::chrono::steady_clock::now();
       const meso::BakeResult r = meso::bake(low, high, o);
       seconds.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+      cpu.push_back(process_cpu_seconds() - c0);
       covered = r.covered_texels;
       hits = r.hits;
     }
     std::sort(seconds.begin(), seconds.end());
+    std::sort(cpu.begin(), cpu.end());
     std::printf("{\"size\": %d, \"low_faces\": %zu, \"high_faces\": %zu, \"covered_texels\": %zu, \"hits\": %zu, \"repeats\": %d, "
-                "\"best_seconds\": %.4f, \"median_seconds\": %.4f, \"rays_per_second\": %.4g}\n",
-                o.width, low.n_faces(), high.n_faces(), covered, hits, repeats, seconds.front(), seconds[seconds.size() / 2],
+                "\"best_seconds\": %.4f, \"median_seconds\": %.4f, \"median_cpu_seconds\": %.4f, \"rays_per_second\": %.4g}\n",
+                o.width, low.n_faces(), high.n_faces(), covered, hits, repeats, seconds.front(), seconds[seconds.size() / 2], cpu[cpu.size() / 2],
                 2.0 * static_cast<double>(covered) / seconds[seconds.size() / 2]);
   } catch (const meso::Error& e) {
     std::fprintf(stderr, "bake_time: %s\n", e.what());
