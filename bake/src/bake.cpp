@@ -39,7 +39,9 @@ struct RayHit {
 // by the bake's output hash): the inverse from the cofactors and 1 / det, det from the first
 // column's cofactors; product rows 0 and 1 summed (x0 + x1) + x2 (Eigen's packet path),
 // row 2 x0 + (x1 + x2) (its scalar tail). Without the temporaries of the expression template,
-// which cost more than the arithmetic.
+// which cost more than the arithmetic. (Checked with the project's flags: x86-64 baseline, no
+// FMA contraction; a build that contracts either side may round differently, as Eigen itself
+// would across such builds.)
 Eigen::Vector3d inverse_times(const Eigen::Matrix3d& m, const Eigen::Vector3d& h) {
   auto cofactor = [&m](int i, int j) {
     const int i1 = (i + 1) % 3, i2 = (i + 2) % 3, j1 = (j + 1) % 3, j2 = (j + 2) % 3;
