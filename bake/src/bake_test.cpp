@@ -2,6 +2,7 @@
 
 #include "meso/bake/dilate.hpp"
 #include "meso/bake/uv_raster.hpp"
+#include "meso/core/uv_texels.hpp"
 #include "meso/examples/brick_wall.hpp"
 #include "test_support.hpp"
 
@@ -10,6 +11,7 @@
 #include <tbb/global_control.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -692,6 +694,67 @@ TEST(UvRaster, BandsGiveTheWholeImage) {
         ASSERT_EQ(std::memcmp(whole[i].bary.data(), s->bary.data(), sizeof(whole[i].bary)), 0) << x << "," << y;
       }
     }
+  }
+}
+
+// The rasteriser tests texel centres only within a per-row span of each triangle, bounded
+// with a margin: the same samples as testing every centre of the triangle's box (the rule's
+// plain form, written out here), on random triangles: slivers, near-horizontal and
+// near-vertical edges, triangles smaller than a texel, both windings, corners off the map.
+TEST(UvRaster, SpansGiveTheWholeBoxTestsAnswer) {
+  std::mt19937 rng(12345);
+  std::uniform_real_distribution<float> uv(-0.1f, 1.1f), small(-0.02f, 0.02f);
+  for (int trial = 0; trial < 40; ++trial) {
+    Mesh m = test::make_grid(6, 6);
+    for (auto f : m.faces()) {
+      std::array<Vec2f, 3> c{};
+      c[0] = Vec2f(uv(rng), uv(rng));
+      switch (f.idx() % 4) {
+        case 0: c[1] = Vec2f(uv(rng), uv(rng)); c[2] = Vec2f(uv(rng), uv(rng)); break;
+        case 1: c[1] = c[0] + Vec2f(small(rng), small(rng)); c[2] = c[0] + Vec2f(small(rng), small(rng)); break;  // small
+        case 2: c[1] = Vec2f(uv(rng), c[0][1] + 1e-7f * small(rng)); c[2] = Vec2f(uv(rng), uv(rng)); break;     // ~horizontal edge
+        default: c[1] = Vec2f(uv(rng), uv(rng)); c[2] = c[0] + (c[1] - c[0]) * 0.5f + Vec2f(1e-4f * small(rng), 0); break;  // sliver
+      }
+      int k = 0;
+      for (auto h : face_halfedges(m, f)) m.set_texcoord2D(h, c[static_cast<size_t>(k++)]);
+    }
+    const int width = 37 + trial, height = 29 + 2 * trial;
+    const auto got = rasterize_uv(m, width, height);
+    std::vector<TexelSample> want(static_cast<size_t>(width) * static_cast<size_t>(height));
+    for (auto f : m.faces()) {
+      if (uv_double_area(m, f) == 0.0f) continue;
+      const UvTriangle t = uv_triangle_in_pixels(m, f, width, height);
+      const double area = (t.px[1] - t.px[0]) * (t.py[2] - t.py[0]) - (t.py[1] - t.py[0]) * (t.px[2] - t.px[0]);
+      if (!(std::abs(area) > 0)) continue;
+      int x0, x1, y0, y1;
+      if (!texel_centres_in(std::min({t.px[0], t.px[1], t.px[2]}), std::max({t.px[0], t.px[1], t.px[2]}), width, x0, x1)) continue;
+      if (!texel_centres_in(std::min({t.py[0], t.py[1], t.py[2]}), std::max({t.py[0], t.py[1], t.py[2]}), height, y0, y1)) continue;
+      const double* px = t.px;
+      const double* py = t.py;
+      for (int y = y0; y <= y1; ++y)
+        for (int x = x0; x <= x1; ++x) {
+          const double cx = x + 0.5, cy = y + 0.5;
+          const double w0 = ((px[1] - cx) * (py[2] - cy) - (py[1] - cy) * (px[2] - cx)) / area;
+          const double w1 = ((px[2] - cx) * (py[0] - cy) - (py[2] - cy) * (px[0] - cx)) / area;
+          const double w2 = ((px[0] - cx) * (py[1] - cy) - (py[0] - cy) * (px[1] - cx)) / area;
+          if (w0 < -1e-9 || w1 < -1e-9 || w2 < -1e-9) continue;
+          TexelSample& s = want[static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x)];
+          if (s.face >= 0) continue;
+          const double c0 = std::max(w0, 0.0), c1 = std::max(w1, 0.0), c2 = std::max(w2, 0.0), sum = c0 + c1 + c2;
+          s.face = f.idx();
+          s.bary = {static_cast<float>(c0 / sum), static_cast<float>(c1 / sum), static_cast<float>(c2 / sum)};
+          s.centre_inside = true;
+        }
+    }
+    size_t inside = 0;
+    for (size_t i = 0; i < want.size(); ++i) {
+      ASSERT_EQ(got[i].centre_inside, want[i].centre_inside) << "trial " << trial << " texel " << i;
+      if (!want[i].centre_inside) continue;
+      ++inside;
+      ASSERT_EQ(got[i].face, want[i].face) << "trial " << trial << " texel " << i;
+      ASSERT_EQ(std::memcmp(got[i].bary.data(), want[i].bary.data(), sizeof(want[i].bary)), 0) << "trial " << trial << " texel " << i;
+    }
+    EXPECT_GT(inside, want.size() / 4) << "trial " << trial;
   }
 }
 

@@ -34,7 +34,14 @@ std::vector<TexelSample> UvRasterizer::rows(int row0, int row1) const {
   row0 = std::max(row0, 0);
   row1 = std::min(row1, height_);
   std::vector<TexelSample> out(static_cast<size_t>(std::max(row1 - row0, 0)) * static_cast<size_t>(width_));
-  if (row1 <= row0) return out;
+  if (row1 > row0) rows_into(row0, row1, out.data());
+  return out;
+}
+
+void UvRasterizer::rows_into(int row0, int row1, TexelSample* out) const {
+  row0 = std::max(row0, 0);
+  row1 = std::min(row1, height_);
+  if (row1 <= row0) return;
   auto at = [&](int x, int y) -> TexelSample& {
     return out[static_cast<size_t>(y - row0) * static_cast<size_t>(width_) + static_cast<size_t>(x)];
   };
@@ -54,16 +61,36 @@ std::vector<TexelSample> UvRasterizer::rows(int row0, int row1) const {
     // barycentric is computed from its own edge function and accepted down to -kTie (far
     // below a texel, far above rounding), then clamped; the first face in order wins.
     constexpr double kTie = 1e-9;
+    const double sign = f.area > 0 ? 1.0 : -1.0;
     for (int y = y0; y <= y1; ++y) {
       const double cy = y + 0.5;
-      for (int x = x0; x <= x1; ++x) {
+      // The row's centres the test below can accept: where every edge function is at least
+      // -kTie. Edge i's numerator is linear in cx, n_i = a_i + b_i cx with b_i = py_j - py_k
+      // (pixels); an edge with |b_i| >= 1e-3 bounds cx on one side. The bounds are widened by
+      // two texels, a margin of at least 2e-3 in the numerator against its rounding (below
+      // 1e-6 for coordinates up to 10^5 pixels), so the span holds every centre the test
+      // accepts and the test alone decides, texel for texel: the result is that of testing the
+      // whole box, at the cost of about the triangle's texels instead of its box's.
+      double lo = x0, hi = x1;  // in double: the bounds may lie far outside int's range
+      for (int i = 0; i < 3; ++i) {
+        const int j = (i + 1) % 3, k = (i + 2) % 3;
+        const double b = sign * (py[j] - py[k]);
+        if (!(std::abs(b) >= 1e-3)) continue;
+        const double a = sign * (px[j] * (py[k] - cy) - (py[j] - cy) * px[k]);
+        const double bound = (-kTie * std::abs(f.area) - a) / b - 0.5;  // in x (cx = x + 0.5)
+        if (!std::isfinite(bound)) continue;
+        if (b > 0) lo = std::max(lo, std::floor(bound) - 2.0);
+        else hi = std::min(hi, std::ceil(bound) + 2.0);
+      }
+      if (!(lo <= hi)) continue;  // then x0 <= lo <= hi <= x1
+      for (int x = static_cast<int>(lo), xb = static_cast<int>(hi); x <= xb; ++x) {
+        TexelSample& s = at(x, y);
+        if (s.face >= 0) continue;  // first face in face order wins: deterministic
         const double cx = x + 0.5;
         const double w0 = ((px[1] - cx) * (py[2] - cy) - (py[1] - cy) * (px[2] - cx)) / f.area;
         const double w1 = ((px[2] - cx) * (py[0] - cy) - (py[2] - cy) * (px[0] - cx)) / f.area;
         const double w2 = ((px[0] - cx) * (py[1] - cy) - (py[0] - cy) * (px[1] - cx)) / f.area;
         if (w0 < -kTie || w1 < -kTie || w2 < -kTie) continue;
-        TexelSample& s = at(x, y);
-        if (s.face >= 0) continue;  // first face in face order wins: deterministic
         const double c0 = std::max(w0, 0.0), c1 = std::max(w1, 0.0), c2 = std::max(w2, 0.0), sum = c0 + c1 + c2;
         s.face = f.index;
         s.bary = {static_cast<float>(c0 / sum), static_cast<float>(c1 / sum), static_cast<float>(c2 / sum)};
@@ -93,7 +120,6 @@ std::vector<TexelSample> UvRasterizer::rows(int row0, int row1) const {
         s.bary = {static_cast<float>(b[0]), static_cast<float>(b[1]), static_cast<float>(b[2])};
       }
   }
-  return out;
 }
 
 LargeVector<TexelSample> rasterize_uv(const Mesh& mesh, int width, int height) {
@@ -102,8 +128,7 @@ LargeVector<TexelSample> rasterize_uv(const Mesh& mesh, int width, int height) {
   const UvRasterizer raster(mesh, width, height);
   LargeVector<TexelSample> out(static_cast<size_t>(std::max(width, 0)) * static_cast<size_t>(std::max(height, 0)));
   tbb::parallel_for(tbb::blocked_range<int>(0, std::max(height, 0), 8), [&](const tbb::blocked_range<int>& band) {
-    const std::vector<TexelSample> rows = raster.rows(band.begin(), band.end());
-    std::copy(rows.begin(), rows.end(), out.begin() + static_cast<std::ptrdiff_t>(static_cast<size_t>(band.begin()) * static_cast<size_t>(width)));
+    raster.rows_into(band.begin(), band.end(), out.data() + static_cast<size_t>(band.begin()) * static_cast<size_t>(width));
   });
   return out;
 }

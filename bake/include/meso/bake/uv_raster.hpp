@@ -36,6 +36,9 @@ class UvRasterizer {
  public:
   UvRasterizer(const Mesh& mesh, int width, int height);
   std::vector<TexelSample> rows(int y0, int y1) const;
+  // rows(y0, y1) written to out[0 .. (y1 - y0) * width) instead, which must hold default
+  // TexelSamples (no copy of the band).
+  void rows_into(int y0, int y1, TexelSample* out) const;
 
  private:
   struct Face {
