@@ -1101,24 +1101,23 @@ class BlockSearch {
       const int cx0 = 2 * n.x, cx1 = std::min(2 * n.x + 1, kw - 1), cy0 = 2 * n.y, cy1 = std::min(2 * n.y + 1, kh - 1);
       std::array<std::array<double, kBlock>, 2> kgx2{}, kgy2{};
       std::array<double, 2> bgx{}, bgy{};  // gaps to the block's footprint
-      for (int cx = cx0; cx <= cx1; ++cx) {
-        const double x0 = ox + static_cast<double>(cx) * cs, x1 = ox + std::min(static_cast<double>(cx + 1) * cs, static_cast<double>(w_));
-        const size_t u = static_cast<size_t>(cx - cx0);
-        for (int c = 0; c < b.bw; ++c) {
-          const double gp = gap(b.i0 + c, b.i0 + c + 1.0, x0, x1);
-          kgx2[u][static_cast<size_t>(c)] = gp * gp;
+      // Along one axis: the squared gaps from each of the block's texel columns (rows) to
+      // the children's cells k0..k1 (origin o, cells cs wide, clipped at `extent`), and the
+      // gap from the block's footprint [f0, f1].
+      auto axis_gaps = [&](int k0, int k1, double o, double extent, int t0, int texels, double f0, double f1,
+                           std::array<std::array<double, kBlock>, 2>& g2, std::array<double, 2>& bg) {
+        for (int k = k0; k <= k1; ++k) {
+          const double a0 = o + static_cast<double>(k) * cs, a1 = o + std::min(static_cast<double>(k + 1) * cs, extent);
+          const size_t u = static_cast<size_t>(k - k0);
+          for (int c = 0; c < texels; ++c) {
+            const double gp = gap(t0 + c, t0 + c + 1.0, a0, a1);
+            g2[u][static_cast<size_t>(c)] = gp * gp;
+          }
+          bg[u] = gap(f0, f1, a0, a1);
         }
-        bgx[u] = gap(b.f.x0, b.f.x1, x0, x1);
-      }
-      for (int cy = cy0; cy <= cy1; ++cy) {
-        const double y0 = oy + static_cast<double>(cy) * cs, y1 = oy + std::min(static_cast<double>(cy + 1) * cs, static_cast<double>(h_));
-        const size_t u = static_cast<size_t>(cy - cy0);
-        for (int c = 0; c < b.bh; ++c) {
-          const double gp = gap(b.j0 + c, b.j0 + c + 1.0, y0, y1);
-          kgy2[u][static_cast<size_t>(c)] = gp * gp;
-        }
-        bgy[u] = gap(b.f.y0, b.f.y1, y0, y1);
-      }
+      };
+      axis_gaps(cx0, cx1, ox, static_cast<double>(w_), b.i0, b.bw, b.f.x0, b.f.x1, kgx2, bgx);
+      axis_gaps(cy0, cy1, oy, static_cast<double>(h_), b.j0, b.bh, b.f.y0, b.f.y1, kgy2, bgy);
       for (int cy = cy0; cy <= cy1; ++cy)
         for (int cx = cx0; cx <= cx1; ++cx) {
           const float km = kid_max[static_cast<size_t>(cy) * static_cast<size_t>(kw) + static_cast<size_t>(cx)];
