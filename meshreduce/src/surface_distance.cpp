@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <limits>
 #include <memory>
@@ -60,12 +61,26 @@ std::vector<Triangle> triangles(const TriangleSoup& m) {
   return out;
 }
 
+// The squared distance from p to triangle t: Ericson's closest point (reduce::closest_point_sqr),
+// guarded. On a sliver its region tests can disagree in rounding and reach the interior case
+// with weights outside [0, 1]: a point of the plane beyond the triangle, nearer than the
+// triangle, which would break the search's pruning below; the nearest edge is the answer then.
+double distance_sqr(const Vec3d& p, const Triangle& t) {
+  double w[3];
+  const double d2 = reduce::closest_point_sqr(p, t.a, t.b, t.c, w);
+  if (w[0] >= 0 && w[1] >= 0 && w[2] >= 0 && w[0] <= 1 && w[1] <= 1 && w[2] <= 1) return d2;
+  const double ab = reduce::point_segment_distance(p, t.a, t.b), bc = reduce::point_segment_distance(p, t.b, t.c),
+               ca = reduce::point_segment_distance(p, t.c, t.a);
+  const double e = std::min({ab, bc, ca});
+  return e * e;
+}
+
 // The nearest of a set of triangles to a point: an Embree BVH over them, queried with a
 // sphere that shrinks to each closer triangle found (rtcPointQuery). Embree tests boxes in
 // float, on corners stored relative to the set's centre; the sphere's radius is the exact
 // (double) distance found so far plus a slack of 1e-6 of the coordinates' magnitude, well
 // above the float rounding of the boxes and of the query point, so the nearest triangle is
-// never culled. The distance is Ericson's closest point (reduce::closest_point_sqr), and
+// never culled. The distance is distance_sqr (Ericson's closest point, guarded), and
 // ties go to the lowest index: the answer does not depend on the order Embree visits leaves.
 class ClosestTriangles {
  public:
@@ -96,6 +111,11 @@ class ClosestTriangles {
     rtcAttachGeometry(scene_, geom);
     rtcReleaseGeometry(geom);
     rtcCommitScene(scene_);
+    if (rtcGetDeviceError(device_) != RTC_ERROR_NONE) {
+      rtcReleaseScene(scene_);
+      rtcReleaseDevice(device_);
+      throw InternalError("Embree: cannot build the distance queries' BVH (out of memory?)");
+    }
   }
   ~ClosestTriangles() {
     if (scene_) rtcReleaseScene(scene_);
@@ -117,9 +137,7 @@ class ClosestTriangles {
     q.slack = 1e-6 * std::max(extent_, r.max_abs());
     float radius = std::numeric_limits<float>::infinity();
     if (hint >= 0 && static_cast<size_t>(hint) < tris_.size()) {
-      const Triangle& t = tris_[static_cast<size_t>(hint)];
-      double w[3];
-      q.best2 = reduce::closest_point_sqr(p, t.a, t.b, t.c, w);
+      q.best2 = distance_sqr(p, tris_[static_cast<size_t>(hint)]);
       q.best = hint;
       radius = q.radius(q.best2);
     }
@@ -149,9 +167,7 @@ class ClosestTriangles {
   static bool visit(RTCPointQueryFunctionArguments* args) {
     Query& q = *static_cast<Query*>(args->userPtr);
     const int64_t id = args->primID;
-    const Triangle& t = q.self->tris_[static_cast<size_t>(id)];
-    double w[3];
-    const double d2 = reduce::closest_point_sqr(q.p, t.a, t.b, t.c, w);
+    const double d2 = distance_sqr(q.p, q.self->tris_[static_cast<size_t>(id)]);
     if (d2 > q.best2 || (d2 == q.best2 && id > q.best)) return false;
     q.best2 = d2;
     q.best = id;
@@ -363,11 +379,13 @@ std::vector<double> face_distances(const Mesh& a, const Mesh& b, const SurfaceDi
     int64_t hint = -1;
     for (size_t i = r.begin(); i < r.end(); ++i) {
       const auto [d2, id] = tree_b.nearest(pa[i], hint);
-      nearest[i] = {std::sqrt(d2), live_face[static_cast<size_t>(id)]};
-      hint = id;
+      // id < 0 only for a sample no triangle is near (a NaN coordinate): attributed nowhere.
+      nearest[i] = {std::sqrt(d2), id >= 0 ? live_face[static_cast<size_t>(id)] : SIZE_MAX};
+      if (id >= 0) hint = id;
     }
   });
-  for (const auto& [d, f] : nearest) out[f] = std::max(out[f], d);  // sequential: any thread count
+  for (const auto& [d, f] : nearest)  // sequential: any thread count
+    if (f != SIZE_MAX) out[f] = std::max(out[f], d);
   return out;
 }
 

@@ -667,14 +667,16 @@ UvPackReport pack_uv_charts(Mesh& mesh, const UvPackOptions& o) {
   {
     double s = 0.7 * (total_area > 0 ? std::sqrt(n * n / total_area) : n);
     if (count == 1 && total_area > 0) {
-      // One chart: the largest scale at which its box fits inside the border margin, where the
-      // footprint is bw = floor(w s + kInset) + 1 <= n - 2 margin texels wide (the square
-      // atlas makes it the box's longer side, in any quarter turn). The search below would
-      // stop up to its tolerance short of it; from here it succeeds at once.
+      // One chart: the largest scale at which its box fits inside the border margin (the
+      // square atlas makes it the box's longer side, in any quarter turn), with kInset free
+      // at both ends: the chart spans [margin + kInset, n - margin - kInset], so the float
+      // rounding of the written UVs (~1e-7 n texels) cannot carry it into a margin texel.
+      // The search below would stop up to its tolerance short of it; from here it succeeds
+      // at once.
       double side = std::numeric_limits<double>::infinity();
       for (int f = 0; f < charts[0].frame_count; ++f)
         side = std::min(side, std::max(charts[0].frames[static_cast<size_t>(f)].w, charts[0].frames[static_cast<size_t>(f)].h));
-      const double room = n - 2.0 * atlas_border_margin(o) - kInset;
+      const double room = n - 2.0 * atlas_border_margin(o) - 2.0 * kInset;
       if (side > 0 && room > 0) s = room * (1 - 1e-9) / (side * charts[0].factor), fit_bound = s;
     }
     for (int k = 0; k < 60; ++k) {

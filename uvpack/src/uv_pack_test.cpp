@@ -14,6 +14,7 @@
 #include <stdexcept>
 #include <string>
 #include <tuple>
+#include <utility>
 
 namespace meso {
 namespace {
@@ -251,7 +252,7 @@ std::array<int, 4> touched_box(const Mesh& m, int size) {
     const Vec2f uv = m.texcoord2D(h);
     for (int k = 0; k < 2; ++k) lo[k] = std::min(lo[k], static_cast<double>(uv[k]) * size), hi[k] = std::max(hi[k], static_cast<double>(uv[k]) * size);
   }
-  constexpr double kFloatSlack = 1e-3;  // float UVs of integer texel offsets
+  constexpr double kFloatSlack = 1e-6;  // an edge exactly on a texel edge, after float rounding
   return {static_cast<int>(std::floor(lo[0] + kFloatSlack)), static_cast<int>(std::ceil(hi[0] - kFloatSlack)),
           static_cast<int>(std::floor(lo[1] + kFloatSlack)), static_cast<int>(std::ceil(hi[1] - kFloatSlack))};
 }
@@ -260,12 +261,14 @@ std::array<int, 4> touched_box(const Mesh& m, int size) {
 // side, so that charts at opposite sides are `padding` apart across the wrap; with clamp they
 // may touch the border, and a chart that fills the atlas gets the texels the margin held.
 TEST(UvPack, BorderMarginFollowsTheAddressing) {
-  for (const int padding : {1, 2, 3, 4}) {
+  // 1000 and 600: (size - margin) / size is not a float, so the written UVs round (a chart
+  // packed exactly up to the margin would cross it).
+  for (const auto& [size, padding] : {std::pair{128, 1}, std::pair{128, 2}, std::pair{1000, 3}, std::pair{600, 4}}) {
     const Mesh square = test::make_uv_quads({{0, 0, 1, 1}});
     for (const Mesh& input : {square, scattered_quads(30, 7)}) {
       Mesh wrapped = input, clamped = input;
       UvPackOptions o;
-      o.size = 128;
+      o.size = size;
       o.padding = padding;
       const UvPackReport rw = pack_uv_charts(wrapped, o);
       o.wrap = false;
