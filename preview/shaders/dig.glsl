@@ -64,9 +64,12 @@ float dig_trace(vec3 dir, out float amortised) {
   }
   int steps = dig_steps(dir);
   float step = 1.0 / float(steps);
+  // epsilon_1 and epsilon_2 cover one step of the corner rays' search, whose count was
+  // rounded from their own directions (dig_steps): up to one fewer than this pixel's.
+  float corner_step = 1.0 / float(max(steps - 1, 1));
   // Silhouette blocks (a corner off the mesh) search the whole slab.
-  float top = known ? min(1.0, hi + max(step, kDigEpsilon)) : 1.0;
-  float bottom = known ? max(0.0, lo - step) : 0.0;
+  float top = known ? min(1.0, hi + max(corner_step, kDigEpsilon)) : 1.0;
+  float bottom = known ? max(0.0, lo - corner_step) : 0.0;
   float s_prev = dig_s(dir, top);
   float d_prev = dir.z * s_prev - height_at(v_uv + dir.xy * s_prev);  // ray height minus surface height
   if (d_prev <= 0.0) return s_prev;
