@@ -170,7 +170,7 @@ Mesh reduce_mesh(const Mesh& input, const ReduceOptions& options, ReduceReport* 
   ProgressiveMesh records[2];
   Mesh outputs[2];
   // The two reductions are independent (each deterministic, the input only read) and the
-  // input's side of the measure (its triangles, AABB tree and samples) does not depend on
+  // input's side of the measure (its triangles, BVH and samples) does not depend on
   // either: the three run as parallel tasks, and the measure's set-up is shared. The bar
   // follows the first reduction; the second reports to no one.
   std::unique_ptr<SurfaceDistanceReference> reference;

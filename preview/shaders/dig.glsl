@@ -26,14 +26,10 @@ const float kDigEpsilon = 0.1;
 // Object length s along the view ray at which it has normalised depth z.
 float dig_s(vec3 dir, float z) { return mix(u_h_min, u_h_max, z) / dir.z; }
 
-// Linear-search steps over the whole slab, both passes: the budget at grazing angles, a
-// quarter of it straight on, where a ray crosses few texels (POM's adaptation, section 4.4.2
-// of the survey; the paper's "adaptive linear search", section 5). The corner rays and the
-// pixel rays of a block look the same way, so both passes take the same step height.
-int dig_steps(vec3 dir) {
-  float budget = float(max(u_iterations, 1));
-  return max(1, int(round(mix(budget, max(0.25 * budget, 1.0), clamp(-dir.z, 0.0, 1.0)))));
-}
+// Linear-search steps over the whole slab, both passes: view_adapted_steps of the budget. A
+// corner ray and the pixel rays of its block look almost the same way, so their counts differ
+// by at most one (dig_trace widens its interval by a corner ray's step for that).
+int dig_steps(vec3 dir) { return view_adapted_steps(u_iterations, dir); }
 
 // Pass 1: the steep-parallax linear search (4.3.1) over the whole slab; the normalised depth
 // of the last sample above the surface (1 when the first is already below).

@@ -111,10 +111,8 @@ void main() {
         escapes = true;
       }
     }
-    int steps = max(u_iterations, 1);
-    // POM adapts its step count to the view (section 4.4.2, after Tatarchuk): the budget at
-    // grazing angles, a quarter of it straight on, where the ray crosses few texels.
-    if (u_method == kPom) steps = max(1, int(round(mix(float(steps), max(0.25 * float(steps), 1.0), clamp(-dir.z, 0.0, 1.0)))));
+    // POM adapts its step count to the view (section 4.4.2); steep and relief take the budget.
+    int steps = u_method == kPom ? view_adapted_steps(u_iterations, dir) : max(u_iterations, 1);
     float s_prev = s_in;
     float d_prev = dir.z * s_in + bend * s_in * s_in - height_at(v_uv + dir.xy * s_in);  // ray height minus surface height
     float s_hit = s_out;

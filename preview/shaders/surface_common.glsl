@@ -60,6 +60,15 @@ const int kMesh = 0, kTessellation = 1, kBump = 2, kParallax = 3, kOffsetLimited
           kIterativeParallax = 6, kSteep = 7, kRelief = 8, kPom = 9, kCone = 10, kRelaxedCone = 11,
           kPyramid = 12, kSphereTracing = 13, kDig = 14, kVdm = 15, kDstream = 16;
 const int kReliefBinarySteps = 8;
+
+// Linear-search steps over the whole slab, adapted to the view (survey section 4.4.2, POM
+// after Tatarchuk; DIG-DM's "adaptive linear search", its section 5): the budget at grazing
+// angles, a quarter of it straight on, where a ray crosses few texels. dir: the unit view
+// ray in tangent space (dir.z < 0 going into the surface).
+int view_adapted_steps(int budget, vec3 dir) {
+  float b = float(max(budget, 1));
+  return max(1, int(round(mix(b, max(0.25 * b, 1.0), clamp(-dir.z, 0.0, 1.0)))));
+}
 const int kConeBisectionSteps = 24;  // relaxed cones: halvings of the step that crossed the surface
 const float kConeFar = 1e30;
 

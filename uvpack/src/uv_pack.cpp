@@ -131,6 +131,10 @@ Frame min_area_frame(const Chart& c) {
 // otherwise touch the neighbouring texel once the new UVs are rounded to float.
 constexpr double kInset = 1.0 / 64;
 
+// Free texels kept between two charts' touched texels: the padding, at least 2 with mip_safe
+// (level 0's share of the per-level gaps, see pack_uv_charts in the header).
+int chart_gap(const UvPackOptions& o) { return o.mip_safe >= 0 ? std::max(2, o.padding) : std::max(0, o.padding); }
+
 struct Placement {
   int orientation = 0, x = 0, y = 0;
 };
@@ -307,7 +311,7 @@ Attempt place_all(const std::vector<Chart>& charts, const Footprints& prints, co
   Attempt result;
   std::vector<Placement>& where = result.where;
   size_t& touched = result.touched;
-  const int n = o.size, pad = o.mip_safe >= 0 ? std::max(2, o.padding) : std::max(0, o.padding), margin = atlas_border_margin(o);
+  const int n = o.size, pad = chart_gap(o), margin = atlas_border_margin(o);
   // A packing cannot succeed when the charts' texels (each in its smallest orientation)
   // exceed the texels inside the margin: fail before placing anything.
   std::vector<size_t> least(charts.size());
@@ -572,7 +576,7 @@ UvPackReport pack_uv_charts(Mesh& mesh, const UvPackOptions& o) {
   {
     // Each chart keeps at least one texel and `pad` free texels to the next, inside a border
     // margin: more charts than fit that way cannot be packed at any scale.
-    const int pad = o.mip_safe >= 0 ? std::max(2, o.padding) : std::max(0, o.padding), margin = atlas_border_margin(o);
+    const int pad = chart_gap(o), margin = atlas_border_margin(o);
     const long long side = o.size - 2LL * margin;
     if (side <= 0)
       throw std::invalid_argument("padding " + std::to_string(o.padding) + " leaves no texel inside a " + std::to_string(o.size) + "-texel atlas");
