@@ -230,6 +230,8 @@ void add_meshreduce(CLI::App& app, Context& ctx) {
       ReduceReport r;
       ProgressiveMesh pm;
       const bool record = !args->progressive.empty();
+      if (record && o.quality == ReduceQuality::best)
+        warn(ctx.globals, "--progressive: --quality best skips its surface fit, so that the record's last level is the output");
       const Mesh out = reduce_mesh(input, o, &r, progress, record ? &pm : nullptr);
       const bool locked = o.lock_boundary || !o.lock_groups.empty();
       if (!r.target_reached)
@@ -254,7 +256,11 @@ void add_meshreduce(CLI::App& app, Context& ctx) {
                 {"rejected", r.rejected}};
       if (locked) report["locked_vertices"] = r.locked_vertices;
       if (o.quality == ReduceQuality::best)
-        report["best"] = {{"planes", r.planes}, {"hausdorff_area", r.candidate_hausdorff.at(0)}, {"hausdorff_uniform", r.candidate_hausdorff.at(1)}};
+        report["best"] = {{"planes", r.planes},
+                          {"hausdorff_area", r.candidate_hausdorff.at(0)},
+                          {"hausdorff_uniform", r.candidate_hausdorff.at(1)},
+                          {"fitted", r.fitted},
+                          {"hausdorff_fitted", r.fit_hausdorff >= 0 ? nlohmann::json(r.fit_hausdorff) : nlohmann::json(nullptr)}};
       if (record)
         report["progressive"] = {{"path", args->progressive},
                                  {"collapses", pm.collapses.size()},

@@ -637,20 +637,25 @@ TEST(MeshReduce, EveryPresetKeepsTheGuaranteesOnTheBrickWall) {
       for (auto h : low.voh_range(v)) gaps += low.is_boundary(h);
       EXPECT_LE(gaps, 1u) << "non-manifold vertex " << v.idx();
     }
-    // Within the relief of the cylinder (optimal placement may leave the surface a little).
+    // Within the relief of the cylinder (optimal placement may leave the surface a little;
+    // best's surface fit may move vertices past the relief's extremes, since a coarse
+    // surface that straddles the relief lowers the largest distance: there, within the
+    // measured Hausdorff distance of the band).
+    const float slack = q == ReduceQuality::best && r.fitted ? static_cast<float>(r.distance->hausdorff) : 0.0f;
     for (auto v : low.vertices()) {
       const Vec3f p = low.point(v);
       const float radius = std::hypot(p[0], p[2] + w.bend_radius);
-      EXPECT_GE(radius, w.bend_radius - 0.2f * w.amplitude);
-      EXPECT_LE(radius, w.bend_radius + 1.6f * w.amplitude);
+      EXPECT_GE(radius, w.bend_radius - 0.2f * w.amplitude - slack);
+      EXPECT_LE(radius, w.bend_radius + 1.6f * w.amplitude + slack);
     }
     EXPECT_TRUE(same_bytes(low, reduce_mesh(high, o))) << "deterministic";
   }
 }
 
 // best runs balanced with area-weighted and with uniform face quadrics and keeps the output
-// with the lower measured Hausdorff distance: the area one is balanced's output bit for bit,
-// and the one returned is never farther from the input than balanced's.
+// with the lower measured Hausdorff distance, then fits its free vertices to the input and
+// keeps the fit when it is nearer still: the area candidate is balanced's output bit for bit,
+// and the one returned is never farther from the input than either candidate.
 TEST(MeshReduce, BestKeepsTheNearerOfTwoWeightings) {
   BrickWallOptions w;
   w.columns = 64;
@@ -666,8 +671,11 @@ TEST(MeshReduce, BestKeepsTheNearerOfTwoWeightings) {
   const double area = r.candidate_hausdorff[0], uniform = r.candidate_hausdorff[1];
   EXPECT_EQ(area, measure_surface_distance(high, balanced).hausdorff);
   EXPECT_EQ(r.planes, uniform < area ? "uniform" : "area");
-  EXPECT_EQ(measure_surface_distance(high, best).hausdorff, std::min(area, uniform));
-  EXPECT_EQ(same_bytes(balanced, best), r.planes == "area");
+  ASSERT_GE(r.fit_hausdorff, 0.0) << "the fit ran";
+  EXPECT_EQ(r.fitted, r.fit_hausdorff < std::min(area, uniform));
+  EXPECT_EQ(measure_surface_distance(high, best).hausdorff, r.fitted ? r.fit_hausdorff : std::min(area, uniform));
+  EXPECT_LE(measure_surface_distance(high, best).hausdorff, std::min(area, uniform));
+  EXPECT_EQ(same_bytes(balanced, best), r.planes == "area" && !r.fitted);
   EXPECT_LE(best.n_faces(), 300u);
   EXPECT_NE(area, uniform) << "the two weightings should give different meshes";
   // The kept output's distance comes with the report, as measure_surface_distance gives it.
@@ -682,6 +690,7 @@ TEST(MeshReduce, BestKeepsTheNearerOfTwoWeightings) {
   ReduceReport r1;
   EXPECT_TRUE(same_bytes(best, reduce_mesh(high, o, &r1)));
   EXPECT_EQ(r1.candidate_hausdorff, r.candidate_hausdorff);
+  EXPECT_EQ(r1.fit_hausdorff, r.fit_hausdorff);
 }
 
 // fast trades error for evaluations: on the sphere and on the bricks its Hausdorff distance

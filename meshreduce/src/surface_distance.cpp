@@ -2,6 +2,7 @@
 // distances themselves in double precision.
 #include "meso/meshreduce/surface_distance.hpp"
 
+#include "closest_triangles.hpp"
 #include "geometry.hpp"
 
 #include "meso/core/error.hpp"
@@ -24,7 +25,10 @@ namespace meso {
 
 namespace {
 
+using reduce::ClosestTriangles;
+using reduce::Triangle;
 using reduce::Vec3d;
+using reduce::point;
 
 // splitmix64: a portable generator, so samples are the same on every platform.
 struct Random {
@@ -37,15 +41,6 @@ struct Random {
   }
   double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
 };
-
-struct Triangle {
-  Vec3d a, b, c;
-  double area() const { return 0.5 * OpenMesh::cross(b - a, c - a).norm(); }
-  // Collinear corners (zero cross product): no area, no plane; left out of the measure.
-  bool degenerate() const { return OpenMesh::cross(b - a, c - a).sqrnorm() == 0; }
-};
-
-Vec3d point(const Vec3f& p) { return Vec3d(p[0], p[1], p[2]); }
 
 Triangle triangle(const TriangleSoup& m, const std::array<uint32_t, 3>& t) {
   return Triangle{point(m.points[t[0]]), point(m.points[t[1]]), point(m.points[t[2]])};
@@ -60,131 +55,6 @@ std::vector<Triangle> triangles(const TriangleSoup& m) {
   }
   return out;
 }
-
-// The squared distance from p to triangle t: Ericson's closest point (reduce::closest_point_sqr),
-// guarded. On a sliver its region tests can disagree in rounding and reach the interior case
-// with weights outside [0, 1]: a point of the plane beyond the triangle, nearer than the
-// triangle, which would break the search's pruning below; the nearest edge is the answer then.
-double distance_sqr(const Vec3d& p, const Triangle& t) {
-  double w[3];
-  const double d2 = reduce::closest_point_sqr(p, t.a, t.b, t.c, w);
-  if (w[0] >= 0 && w[1] >= 0 && w[2] >= 0 && w[0] <= 1 && w[1] <= 1 && w[2] <= 1) return d2;
-  const double ab = reduce::point_segment_distance(p, t.a, t.b), bc = reduce::point_segment_distance(p, t.b, t.c),
-               ca = reduce::point_segment_distance(p, t.c, t.a);
-  const double e = std::min({ab, bc, ca});
-  return e * e;
-}
-
-// The nearest of a set of triangles to a point: an Embree BVH over them, queried with a
-// sphere that shrinks to each closer triangle found (rtcPointQuery). Embree tests boxes in
-// float, on corners stored relative to the set's centre; the sphere's radius is the exact
-// (double) distance found so far plus a slack of 1e-6 of the coordinates' magnitude, well
-// above the float rounding of the boxes and of the query point, so the nearest triangle is
-// never culled. The distance is distance_sqr (Ericson's closest point, guarded), and
-// ties go to the lowest index: the answer does not depend on the order Embree visits leaves.
-class ClosestTriangles {
- public:
-  explicit ClosestTriangles(const std::vector<Triangle>& tris) : tris_(tris) {
-    if (tris.empty()) return;
-    Vec3d lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
-    for (const Triangle& t : tris)
-      for (const Vec3d& p : {t.a, t.b, t.c}) lo.minimize(p), hi.maximize(p);
-    centre_ = (lo + hi) * 0.5;
-    extent_ = std::max((hi - lo).max_abs() * 0.5, std::numeric_limits<double>::min());
-    vertices_.resize(9 * tris.size() + 1, 0.0f);  // + 1: Embree reads 16 bytes at the last vertex
-    indices_.resize(3 * tris.size());
-    for (size_t i = 0; i < tris.size(); ++i) {
-      const Vec3d corners[3] = {tris[i].a, tris[i].b, tris[i].c};
-      for (size_t k = 0; k < 3; ++k) {
-        for (int j = 0; j < 3; ++j) vertices_[9 * i + 3 * k + static_cast<size_t>(j)] = static_cast<float>(corners[k][j] - centre_[j]);
-        indices_[3 * i + k] = static_cast<uint32_t>(3 * i + k);
-      }
-    }
-    device_ = rtcNewDevice(nullptr);
-    if (!device_) throw InternalError("Embree: cannot create a device");
-    scene_ = rtcNewScene(device_);
-    rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_MEDIUM);
-    RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
-    rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, vertices_.data(), 0, 3 * sizeof(float), 3 * tris.size());
-    rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, indices_.data(), 0, 3 * sizeof(uint32_t), tris.size());
-    rtcCommitGeometry(geom);
-    rtcAttachGeometry(scene_, geom);
-    rtcReleaseGeometry(geom);
-    rtcCommitScene(scene_);
-    if (rtcGetDeviceError(device_) != RTC_ERROR_NONE) {
-      rtcReleaseScene(scene_);
-      rtcReleaseDevice(device_);
-      throw InternalError("Embree: cannot build the distance queries' BVH (out of memory?)");
-    }
-  }
-  ~ClosestTriangles() {
-    if (scene_) rtcReleaseScene(scene_);
-    if (device_) rtcReleaseDevice(device_);
-  }
-  ClosestTriangles(const ClosestTriangles&) = delete;
-  ClosestTriangles& operator=(const ClosestTriangles&) = delete;
-
-  bool empty() const { return tris_.empty(); }
-
-  // The squared distance from p to the nearest triangle and that triangle's index (infinity
-  // and -1 for an empty set). `hint`, a triangle likely to be near (e.g. the previous
-  // sample's nearest; -1: none), starts the search with its distance as the radius, which
-  // prunes from the first node on; the answer is the same with any hint. Thread-safe.
-  std::pair<double, int64_t> nearest(const Vec3d& p, int64_t hint = -1) const {
-    Query q{this, p, std::numeric_limits<double>::infinity(), -1, 0};
-    if (tris_.empty()) return {q.best2, q.best};
-    const Vec3d r = p - centre_;
-    q.slack = 1e-6 * std::max(extent_, r.max_abs());
-    float radius = std::numeric_limits<float>::infinity();
-    if (hint >= 0 && static_cast<size_t>(hint) < tris_.size()) {
-      q.best2 = distance_sqr(p, tris_[static_cast<size_t>(hint)]);
-      q.best = hint;
-      radius = q.radius(q.best2);
-    }
-    RTCPointQuery query;
-    query.x = static_cast<float>(r[0]);
-    query.y = static_cast<float>(r[1]);
-    query.z = static_cast<float>(r[2]);
-    query.time = 0.0f;
-    query.radius = radius;
-    RTCPointQueryContext context;
-    rtcInitPointQueryContext(&context);
-    rtcPointQuery(scene_, &query, &context, &ClosestTriangles::visit, &q);
-    return {q.best2, q.best};
-  }
-
- private:
-  struct Query {
-    const ClosestTriangles* self;
-    Vec3d p;
-    double best2;
-    int64_t best;
-    double slack;
-    // The search radius for a squared distance d2: its root, plus 1e-6 of it and the slack.
-    float radius(double d2) const { return static_cast<float>(std::sqrt(d2) * (1 + 1e-6) + slack); }
-  };
-
-  static bool visit(RTCPointQueryFunctionArguments* args) {
-    Query& q = *static_cast<Query*>(args->userPtr);
-    const int64_t id = args->primID;
-    const double d2 = distance_sqr(q.p, q.self->tris_[static_cast<size_t>(id)]);
-    if (d2 > q.best2 || (d2 == q.best2 && id > q.best)) return false;
-    q.best2 = d2;
-    q.best = id;
-    const float radius = q.radius(d2);
-    if (!(radius < args->query->radius)) return false;
-    args->query->radius = radius;
-    return true;
-  }
-
-  const std::vector<Triangle>& tris_;
-  std::vector<float> vertices_;
-  std::vector<uint32_t> indices_;
-  Vec3d centre_{0, 0, 0};
-  double extent_ = 1;
-  RTCDevice device_ = nullptr;
-  RTCScene scene_ = nullptr;
-};
 
 // Every point used by a triangle, plus `n` points spread over the triangles by area.
 std::vector<Vec3d> sample(const TriangleSoup& m, const std::vector<Triangle>& tris, size_t n, uint64_t seed) {

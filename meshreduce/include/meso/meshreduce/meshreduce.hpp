@@ -37,9 +37,15 @@ struct ProgressiveMesh;  // progressive.hpp
 //    scaled so that seam and boundary planes keep their balance), then the output with the
 //    lower two-sided Hausdorff distance to the input (measure_surface_distance; area wins
 //    ties). Neither weighting is better at every budget on the bench meshes (docs/
-//    benchmarks.md); best costs two reductions and two measurements, run as parallel tasks
-//    (TBB; the output does not depend on the thread count). With `progressive`,
-//    the record is the chosen run's: its levels equal that weighting's balanced reduction.
+//    benchmarks.md). Then the chosen output's vertices are fitted to the input surface
+//    (Hoppe et al. 1993's distance energy, two-sided, reweighted toward the largest
+//    distances; meshreduce/src/surface_fit.hpp) except those on boundaries, UV seams and
+//    locks, and the fitted mesh is kept when its measured Hausdorff distance is lower.
+//    Costs: two reductions, three measurements and the fit; the reductions run as parallel
+//    tasks (TBB; the output does not depend on the thread count). With `progressive`, the
+//    record is the chosen run's (its levels equal that weighting's balanced reduction) and
+//    the output is its last level: no fit; nor with max_normal_deviation below 180 degrees,
+//    which the fit does not check.
 enum class ReduceQuality { fast, balanced, best };
 
 struct ReduceOptions {
@@ -117,13 +123,19 @@ struct ReduceReport {
   // With ReduceQuality::best: the kept output's measured distance to the input, the same
   // as measure_surface_distance(input, output) would give (callers need not measure again).
   std::optional<SurfaceDistance> distance;
+  // With ReduceQuality::best: whether the surface fit was kept, and the Hausdorff distance
+  // the fitted candidate measured (object units; -1 when the fit did not run).
+  bool fitted = false;
+  double fit_hausdorff = -1;
 };
 
 // Returns the reduced mesh. Guarantees:
 //  - every collapse passes OpenMesh's topological test (is_collapse_ok: manifold, no
 //    duplicate faces);
 //  - no face normal flips, and no output face deviates more than max_normal_deviation from
-//    the input faces it replaced; no collapse creates a needle beyond max_aspect_ratio;
+//    the input faces it replaced; no collapse creates a needle beyond max_aspect_ratio (and
+//    best's surface fit turns no face by 90 degrees or more and makes none a needle beyond
+//    it either);
 //  - when the input has UVs: no UV triangle flips or becomes degenerate, the UVs of the
 //    moved vertex are re-fitted (interior vertices: barycentric re-projection of the new
 //    position onto the old neighbourhood; seam/boundary vertices: linear interpolation

@@ -1,0 +1,317 @@
+#include "surface_fit.hpp"
+
+#include "closest_triangles.hpp"
+
+#include <Eigen/Sparse>
+#include <Eigen/SparseCholesky>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <memory>
+
+namespace meso::reduce {
+
+namespace {
+
+Vec3d position(const Mesh& mesh, VertexHandle v) { return point(mesh.point(v)); }
+
+// A face's corners (face_halfedges order) and its unnormalised normal.
+struct FaceCorners {
+  std::array<int, 3> v;
+};
+
+std::vector<FaceCorners> face_corners(const Mesh& mesh) {
+  std::vector<FaceCorners> out(mesh.n_faces());
+  for (auto f : mesh.faces()) {
+    const auto hs = face_halfedges(mesh, f);
+    for (size_t k = 0; k < 3; ++k) out[static_cast<size_t>(f.idx())].v[k] = mesh.to_vertex_handle(hs[k]).idx();
+  }
+  return out;
+}
+
+Vec3d normal_of(const std::vector<Vec3d>& p, const FaceCorners& f) {
+  const Vec3d& a = p[static_cast<size_t>(f.v[0])];
+  return OpenMesh::cross(p[static_cast<size_t>(f.v[1])] - a, p[static_cast<size_t>(f.v[2])] - a);
+}
+
+// Whether moving a face's corners from `before` to `after` keeps it acceptable: it neither
+// turns by 90 degrees or more nor degenerates; it does not turn away from `facing` (the
+// mean normal of the input where it is, zero if unknown) below min(its cosine before,
+// kFacing); and it does not become a needle beyond the bound (or a worse one).
+constexpr double kFacing = 0.5;  // cos 60 degrees
+bool acceptable(const std::vector<Vec3d>& before, const std::vector<Vec3d>& after, const FaceCorners& f, const Vec3d& facing,
+                double max_aspect) {
+  const Vec3d n0 = normal_of(before, f), n1 = normal_of(after, f);
+  if (!(OpenMesh::dot(n0, n1) > 0) || !(n1.sqrnorm() > 0)) return false;
+  if (facing.sqrnorm() > 0) {
+    const double c0 = OpenMesh::dot(n0, facing) / n0.norm(), c1 = OpenMesh::dot(n1, facing) / n1.norm();
+    if (c1 < std::min(c0, kFacing)) return false;
+  }
+  if (max_aspect <= 0) return true;
+  auto aspect = [&](const std::vector<Vec3d>& p) {
+    return aspect_ratio(p[static_cast<size_t>(f.v[0])], p[static_cast<size_t>(f.v[1])], p[static_cast<size_t>(f.v[2])]);
+  };
+  const double a1 = aspect(after);
+  return a1 <= max_aspect || a1 <= aspect(before);
+}
+
+}  // namespace
+
+struct SurfaceFitTarget::Impl {
+  std::vector<Vec3d> points;
+  std::vector<double> weights;
+  std::vector<Vec3d> normals;  // of the input at each point (unit; area-weighted at vertices)
+  std::vector<Triangle> triangles;  // non-degenerate ones
+  std::unique_ptr<ClosestTriangles> tree;
+};
+
+SurfaceFitTarget::SurfaceFitTarget(const Mesh& input) : impl_(std::make_unique<Impl>()) {
+  Impl& s = *impl_;
+  std::vector<double> vertex_weight(input.n_vertices(), 0.0);
+  std::vector<Vec3d> vertex_normal(input.n_vertices(), Vec3d(0, 0, 0));
+  for (auto f : input.faces()) {
+    const auto hs = face_halfedges(input, f);
+    std::array<Vec3d, 3> c;
+    for (size_t k = 0; k < 3; ++k) c[k] = position(input, input.to_vertex_handle(hs[k]));
+    const Triangle t{c[0], c[1], c[2]};
+    if (t.degenerate()) continue;
+    s.triangles.push_back(t);
+    const double area = t.area();
+    const Vec3d n = OpenMesh::cross(c[1] - c[0], c[2] - c[0]);  // twice the area long
+    for (size_t k = 0; k < 3; ++k) {
+      const size_t v = static_cast<size_t>(input.to_vertex_handle(hs[k]).idx());
+      vertex_weight[v] += area / 3;
+      vertex_normal[v] += n;
+    }
+    s.points.push_back((c[0] + c[1] + c[2]) / 3.0);
+    s.weights.push_back(area / 3);
+    s.normals.push_back(n / n.norm());
+  }
+  for (auto v : input.vertices()) {
+    const double w = vertex_weight[static_cast<size_t>(v.idx())];
+    if (!(w > 0)) continue;
+    const Vec3d n = vertex_normal[static_cast<size_t>(v.idx())];
+    s.points.push_back(position(input, v));
+    s.weights.push_back(w);
+    s.normals.push_back(n.sqrnorm() > 0 ? Vec3d(n / n.norm()) : Vec3d(0, 0, 0));
+  }
+  s.tree = std::make_unique<ClosestTriangles>(s.triangles);
+}
+
+SurfaceFitTarget::~SurfaceFitTarget() = default;
+
+SurfaceFitReport fit_to_surface(Mesh& mesh, const SurfaceFitTarget& target, const std::vector<uint8_t>& fixed,
+                                const SurfaceFitOptions& options) {
+  SurfaceFitReport rep;
+  const SurfaceFitTarget::Impl& in = target.impl();
+  const size_t nv = mesh.n_vertices();
+  // Unknowns: the free vertices, numbered in vertex order.
+  std::vector<int> unknown(nv, -1);
+  int n_free = 0;
+  for (size_t i = 0; i < nv; ++i)
+    if (!fixed[i] && !mesh.is_isolated(VertexHandle(static_cast<int>(i)))) unknown[i] = n_free++;
+  rep.free_vertices = static_cast<size_t>(n_free);
+  if (n_free == 0 || in.points.empty() || mesh.n_faces() == 0) return rep;
+
+  const std::vector<FaceCorners> faces = face_corners(mesh);
+  std::vector<std::vector<int>> vertex_faces(nv);
+  for (size_t f = 0; f < faces.size(); ++f)
+    for (const int v : faces[f].v) vertex_faces[static_cast<size_t>(v)].push_back(static_cast<int>(f));
+  std::vector<Vec3d> pos(nv);
+  for (size_t i = 0; i < nv; ++i) pos[i] = position(mesh, VertexHandle(static_cast<int>(i)));
+  double total_weight = 0;
+  for (const double w : in.weights) total_weight += w;
+  // The pull toward the current positions: a hundredth of the weight a vertex attracts on
+  // average, so that it decides only where the samples do not.
+  const double lambda = 1e-2 * total_weight / static_cast<double>(n_free);
+
+  // One residual: a point of the output, sum_k b_k v_k over a face's corners, and where it
+  // should be. Forward rows: an input sample and its closest point on the output (Hoppe et
+  // al.'s E_dist). Backward rows: fixed points of each output face and their closest points
+  // on the input, so that the fit also sees output that stands off the input (the other
+  // half of the Hausdorff distance).
+  struct Row {
+    int face = -1;
+    double b[3] = {0, 0, 0};
+    Vec3d goal{0, 0, 0};
+    double weight = 0, distance = 0;
+  };
+  // Corners, edge midpoints, centroid and three inner points: where a flat face stands off a
+  // curved surface most (corners and edges) as well as inside.
+  static constexpr int kBackwardPoints = 10;
+  static constexpr double kBackward[kBackwardPoints][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0.5, 0.5, 0}, {0, 0.5, 0.5}, {0.5, 0, 0.5},
+                                                           {1.0 / 3, 1.0 / 3, 1.0 / 3}, {2.0 / 3, 1.0 / 6, 1.0 / 6}, {1.0 / 6, 2.0 / 3, 1.0 / 6}, {1.0 / 6, 1.0 / 6, 2.0 / 3}};
+  // Forward rows: every stride-th input sample, weighted by the stride, about
+  // samples_per_face per output face (the input's samples are many more than a coarse
+  // output needs, and each costs a closest-point query per iteration).
+  const size_t stride = std::max<size_t>(1, in.points.size() / std::max<size_t>(1, options.samples_per_face * faces.size()));
+  const size_t n_forward = (in.points.size() + stride - 1) / stride;
+  std::vector<Row> rows(n_forward + kBackwardPoints * faces.size());
+  struct FaceBlock {
+    double m[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+    Vec3d goal[3] = {Vec3d(0, 0, 0), Vec3d(0, 0, 0), Vec3d(0, 0, 0)};
+  };
+  std::vector<FaceBlock> block(faces.size());
+  std::vector<Vec3d> facing(faces.size());
+  std::vector<Eigen::Triplet<double>> triplets;
+  triplets.reserve(9 * faces.size() + static_cast<size_t>(n_free));
+  for (int it = 0; it < options.iterations; ++it) {
+    // Forward: attach every input sample to its closest point on the current output.
+    std::vector<Triangle> tris;
+    std::vector<int> tri_face;
+    tris.reserve(faces.size());
+    for (size_t f = 0; f < faces.size(); ++f) {
+      const Triangle t{pos[static_cast<size_t>(faces[f].v[0])], pos[static_cast<size_t>(faces[f].v[1])], pos[static_cast<size_t>(faces[f].v[2])]};
+      if (t.degenerate()) continue;
+      tris.push_back(t);
+      tri_face.push_back(static_cast<int>(f));
+    }
+    if (tris.empty()) break;
+    const ClosestTriangles tree(tris);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n_forward, 2048), [&](const tbb::blocked_range<size_t>& r) {
+      int64_t hint = -1;
+      for (size_t i = r.begin(); i < r.end(); ++i) {
+        const size_t si = i * stride;
+        const auto [d2, id] = tree.nearest(in.points[si], hint);
+        hint = id;
+        Row& row = rows[i];
+        row.face = -1;
+        if (id < 0) continue;
+        const Triangle& t = tris[static_cast<size_t>(id)];
+        double w[3];
+        closest_point_sqr(in.points[si], t.a, t.b, t.c, w);
+        // A sliver's rounding can leave the weights slightly outside [0, 1]: clamp them.
+        double sum = 0;
+        for (double& x : w) sum += (x = std::clamp(x, 0.0, 1.0));
+        if (!(sum > 0)) continue;
+        row.face = tri_face[static_cast<size_t>(id)];
+        for (int k = 0; k < 3; ++k) row.b[k] = w[k] / sum;
+        row.goal = in.points[si];
+        row.weight = in.weights[si] * static_cast<double>(stride);
+        row.distance = std::sqrt(d2);
+      }
+    });
+    // What each face stands for: the mean normal of the input samples attached to it.
+    std::fill(facing.begin(), facing.end(), Vec3d(0, 0, 0));
+    for (size_t i = 0; i < n_forward; ++i)
+      if (rows[i].face >= 0) facing[static_cast<size_t>(rows[i].face)] += rows[i].weight * in.normals[i * stride];
+    for (Vec3d& m : facing)
+      if (m.sqrnorm() > 0) m /= m.norm();
+    // Backward: points of each output face to their closest points on the input.
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, faces.size(), 512), [&](const tbb::blocked_range<size_t>& r) {
+      int64_t hint = -1;
+      for (size_t f = r.begin(); f < r.end(); ++f) {
+        const FaceCorners& fc = faces[f];
+        const Vec3d& a = pos[static_cast<size_t>(fc.v[0])];
+        const Vec3d& b = pos[static_cast<size_t>(fc.v[1])];
+        const Vec3d& c = pos[static_cast<size_t>(fc.v[2])];
+        const double area = 0.5 * OpenMesh::cross(b - a, c - a).norm();
+        for (int j = 0; j < kBackwardPoints; ++j) {
+          Row& row = rows[n_forward + kBackwardPoints * f + static_cast<size_t>(j)];
+          row.face = -1;
+          if (!(area > 0)) continue;
+          const Vec3d x = a * kBackward[j][0] + b * kBackward[j][1] + c * kBackward[j][2];
+          const auto [d2, id] = in.tree->nearest(x, hint);
+          hint = id;
+          if (id < 0) continue;
+          const Triangle& t = in.triangles[static_cast<size_t>(id)];
+          double w[3];
+          closest_point_sqr(x, t.a, t.b, t.c, w);
+          row.face = static_cast<int>(f);
+          for (int k = 0; k < 3; ++k) row.b[k] = kBackward[j][k];
+          row.goal = t.a * w[0] + t.b * w[1] + t.c * w[2];
+          row.weight = area / kBackwardPoints;
+          row.distance = std::sqrt(d2);
+        }
+      }
+    });
+    // IRLS toward the L_p norm: p from 2 up to options.power over the iterations.
+    const double p = options.iterations > 1 ? 2.0 + (options.power - 2.0) * it / (options.iterations - 1) : 2.0;
+    double sum_w = 0, sum_wd2 = 0;
+    for (const Row& row : rows)
+      if (row.face >= 0) sum_w += row.weight, sum_wd2 += row.weight * row.distance * row.distance;
+    const double rms = sum_w > 0 ? std::sqrt(sum_wd2 / sum_w) : 0;
+
+    // The normal equations (A^T W A + lambda I) v = A^T W x + lambda v', gathered per face
+    // first (a row touches one face's three corners: a 3 x 3 block and three goals), in row
+    // order: the same sums whatever the threads. Fixed corners go to the right-hand side.
+    std::fill(block.begin(), block.end(), FaceBlock{});
+    for (const Row& row : rows) {
+      if (row.face < 0) continue;
+      double w = row.weight;
+      if (p > 2 && rms > 0) w *= std::pow(std::max(row.distance / rms, 0.1), p - 2);
+      FaceBlock& fb = block[static_cast<size_t>(row.face)];
+      for (int j = 0; j < 3; ++j) {
+        for (int k = 0; k < 3; ++k) fb.m[j][k] += w * row.b[j] * row.b[k];
+        fb.goal[j] += (w * row.b[j]) * row.goal;
+      }
+    }
+    triplets.clear();
+    Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(n_free, 3);
+    for (size_t f = 0; f < faces.size(); ++f) {
+      const FaceBlock& fb = block[f];
+      for (int j = 0; j < 3; ++j) {
+        const int uj = unknown[static_cast<size_t>(faces[f].v[j])];
+        if (uj < 0) continue;
+        Vec3d r = fb.goal[j];
+        for (int k = 0; k < 3; ++k) {
+          const int uk = unknown[static_cast<size_t>(faces[f].v[k])];
+          if (uk >= 0) triplets.emplace_back(uj, uk, fb.m[j][k]);
+          else r -= fb.m[j][k] * pos[static_cast<size_t>(faces[f].v[k])];
+        }
+        for (int c = 0; c < 3; ++c) rhs(uj, c) += r[c];
+      }
+    }
+    for (size_t i = 0; i < nv; ++i) {
+      const int u = unknown[i];
+      if (u < 0) continue;
+      triplets.emplace_back(u, u, lambda);
+      for (int c = 0; c < 3; ++c) rhs(u, c) += lambda * pos[i][c];
+    }
+    Eigen::SparseMatrix<double> normal(n_free, n_free);
+    normal.setFromTriplets(triplets.begin(), triplets.end());
+    const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(normal);
+    if (solver.info() != Eigen::Success) break;
+    const Eigen::MatrixXd solution = solver.solve(rhs);
+    if (solver.info() != Eigen::Success || !solution.allFinite()) break;
+    ++rep.iterations;
+
+    // Move, then undo the moves of the corners of any face the move made unacceptable,
+    // until none is left (each round undoes at least one vertex, so this ends).
+    std::vector<Vec3d> next = pos;
+    for (size_t i = 0; i < nv; ++i) {
+      if (unknown[i] < 0) continue;
+      // As it will be stored (float), so that the checks below hold for the output itself.
+      const Eigen::Index u = unknown[i];
+      next[i] = point(Vec3f(static_cast<float>(solution(u, 0)), static_cast<float>(solution(u, 1)), static_cast<float>(solution(u, 2))));
+    }
+    std::vector<uint8_t> check(faces.size(), 1);
+    for (bool changed = true; changed;) {
+      changed = false;
+      for (size_t f = 0; f < faces.size(); ++f) {
+        if (!check[f]) continue;
+        check[f] = 0;
+        if (acceptable(pos, next, faces[f], facing[f], options.max_aspect_ratio)) continue;
+        for (const int v : faces[f].v) {
+          const size_t vi = static_cast<size_t>(v);
+          if (next[vi] == pos[vi]) continue;
+          next[vi] = pos[vi];
+          ++rep.held_back;
+          for (const int g : vertex_faces[vi]) check[static_cast<size_t>(g)] = 1;
+          changed = true;
+        }
+      }
+    }
+    pos = std::move(next);
+  }
+  for (size_t i = 0; i < nv; ++i)
+    if (unknown[i] >= 0)  // exactly representable: rounded to float above
+      mesh.set_point(VertexHandle(static_cast<int>(i)), Vec3f(static_cast<float>(pos[i][0]), static_cast<float>(pos[i][1]), static_cast<float>(pos[i][2])));
+  compute_angle_weighted_normals(mesh);
+  return rep;
+}
+
+}  // namespace meso::reduce

@@ -1,0 +1,77 @@
+// Fitting a reduced mesh's vertex positions to the surface it replaces (internal to
+// meshreduce; `--quality best` uses it).
+//
+// Hoppe, DeRose, Duchamp, McDonald and Stuetzle, "Mesh Optimization" (SIGGRAPH 1993),
+// section 4.2 (their E_dist with the connectivity fixed): with each sample x_i of the input
+// surface attached to its closest point on the output, sum_k b_ik v_k (face f_i, barycentric
+// weights b_ik), the positions V that minimise
+//     E(V) = sum_i w_i |x_i - sum_k b_ik v_k|^2 + lambda sum_j |v_j - v_j'|^2
+// solve a sparse linear least-squares problem, three right-hand sides (x, y, z), one normal
+// matrix; then the samples are attached anew and the solve repeats (their alternation,
+// which never increases E). The second term is a weak pull toward the current positions
+// v_j' (in place of their spring energy), so that a vertex whose faces attract no sample
+// stays where it is and the system is positive definite. Quadric placement puts a collapsed
+// vertex where the removed faces' planes meet, off the surface on curved parts (outside on
+// convex ones); the fit lets the coarse surface straddle the fine one instead, which lowers
+// the RMS distance and, usually, the Hausdorff distance (the caller measures and decides).
+#pragma once
+
+#include "geometry.hpp"
+
+#include "meso/core/mesh.hpp"
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+namespace meso::reduce {
+
+// The surface to fit to: points on it with weights (the area each stands for, object
+// units^2): its vertices (a third of their faces' area each) and its face centroids (a third
+// of the face's area each), two per face on a regular mesh, enough for an output with far
+// fewer faces; and its triangles, for the distance the other way.
+class SurfaceFitTarget {
+ public:
+  explicit SurfaceFitTarget(const Mesh& input);
+  ~SurfaceFitTarget();
+  SurfaceFitTarget(const SurfaceFitTarget&) = delete;
+  SurfaceFitTarget& operator=(const SurfaceFitTarget&) = delete;
+
+  struct Impl;
+  const Impl& impl() const { return *impl_; }
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+struct SurfaceFitOptions {
+  int iterations = 6;
+  // Residuals weighted by (distance / RMS distance)^(power - 2), raised from 2 (least
+  // squares) to `power` over the iterations: iteratively reweighted least squares toward
+  // the L_power norm, which leans toward the largest distances (the Hausdorff distance is
+  // the L_infinity one).
+  double power = 5.0;
+  // Input samples used per output face (at most all of them).
+  size_t samples_per_face = 128;
+  // As ReduceOptions::max_aspect_ratio: a move may not make a face a needle beyond this
+  // (unless it already was one). 0: off.
+  float max_aspect_ratio = 40.0f;
+};
+
+struct SurfaceFitReport {
+  int iterations = 0;     // solves made
+  size_t free_vertices = 0;
+  size_t held_back = 0;   // moves refused (summed over iterations) because a face would flip or become a needle
+};
+
+// Moves the vertices of `mesh` whose `fixed` flag is 0 (one flag per vertex) toward the
+// least-squares fit above. Guarantees: fixed vertices keep their positions bit for bit;
+// connectivity and UVs are unchanged; no face's normal turns by 90 degrees or more against
+// its normal before the fit, no face becomes degenerate, and no face's aspect ratio rises
+// beyond max_aspect_ratio (moves that would are undone, vertex by vertex); vertex normals
+// are recomputed (angle-weighted). Deterministic whatever the thread count.
+SurfaceFitReport fit_to_surface(Mesh& mesh, const SurfaceFitTarget& target, const std::vector<uint8_t>& fixed,
+                                const SurfaceFitOptions& options = {});
+
+}  // namespace meso::reduce
