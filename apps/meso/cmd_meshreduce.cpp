@@ -259,8 +259,11 @@ void add_meshreduce(CLI::App& app, Context& ctx) {
         report["best"] = {{"planes", r.planes},
                           {"hausdorff_area", r.candidate_hausdorff.at(0)},
                           {"hausdorff_uniform", r.candidate_hausdorff.at(1)},
-                          {"fitted", r.fitted},
-                          {"hausdorff_fitted", r.fit_hausdorff >= 0 ? nlohmann::json(r.fit_hausdorff) : nlohmann::json(nullptr)}};
+                          {"fitted", r.fitted}};
+      if (o.quality == ReduceQuality::best && r.fitted_hausdorff.size() == 2) {
+        report["best"]["hausdorff_area_fitted"] = r.fitted_hausdorff[0];
+        report["best"]["hausdorff_uniform_fitted"] = r.fitted_hausdorff[1];
+      }
       if (record)
         report["progressive"] = {{"path", args->progressive},
                                  {"collapses", pm.collapses.size()},

@@ -201,30 +201,34 @@ Mesh reduce_mesh(const Mesh& input, const ReduceOptions& options, ReduceReport* 
       [&] {
         if (fit) target = std::make_unique<reduce::SurfaceFitTarget>(input);
       });
-  SurfaceDistance distance[2];
-  tbb::parallel_invoke([&] { distance[0] = reference->measure(outputs[0]); }, [&] { distance[1] = reference->measure(outputs[1]); });
-  const double hausdorff[2] = {distance[0].hausdorff, distance[1].hausdorff};
-  const int pick = hausdorff[1] < hausdorff[0] ? 1 : 0;
-  ReduceReport rep = reports[pick];
-  rep.planes = pick == 1 ? "uniform" : "area";
-  rep.candidate_hausdorff = {hausdorff[0], hausdorff[1]};
-  rep.distance = distance[pick];
-  if (fit) {
-    // The chosen output's free vertices fitted to the input (surface_fit.hpp), kept when that
-    // lowers the Hausdorff distance: the least-squares fit lowers the RMS distance nearly
-    // always, the Hausdorff distance usually but not always (docs/benchmarks.md).
-    Mesh fitted = outputs[pick];
+  // Each candidate measured and, unless the record forbids it, fitted (surface_fit.hpp) and
+  // measured again, as parallel tasks. The fit lowers the RMS distance nearly always, the
+  // Hausdorff distance usually but not always, and not always most on the candidate that
+  // was nearer before it (docs/benchmarks.md): the nearest of the four is kept (ties: the
+  // unfitted one, then area).
+  SurfaceDistance distance[2], fit_distance[2];
+  Mesh fitted[2];
+  auto candidate = [&](int k) {
+    distance[k] = reference->measure(outputs[k]);
+    if (!fit) return;
+    fitted[k] = outputs[k];
     reduce::SurfaceFitOptions fo;
     fo.max_aspect_ratio = options.max_aspect_ratio;
-    reduce::fit_to_surface(fitted, *target, fit_fixed_vertices(fitted, options), fo);
-    const SurfaceDistance d = reference->measure(fitted);
-    rep.fit_hausdorff = d.hausdorff;
-    if (d.hausdorff < distance[pick].hausdorff) {
-      outputs[pick] = std::move(fitted);
-      rep.distance = d;
-      rep.fitted = true;
-    }
-  }
+    reduce::fit_to_surface(fitted[k], *target, fit_fixed_vertices(fitted[k], options), fo);
+    fit_distance[k] = reference->measure(fitted[k]);
+  };
+  tbb::parallel_invoke([&] { candidate(0); }, [&] { candidate(1); });
+  int pick = distance[1].hausdorff < distance[0].hausdorff ? 1 : 0;
+  bool use_fit = false;
+  for (int k = 0; k < 2 && fit; ++k)
+    if (fit_distance[k].hausdorff < (use_fit ? fit_distance[pick] : distance[pick]).hausdorff) pick = k, use_fit = true;
+  ReduceReport rep = reports[pick];
+  rep.planes = pick == 1 ? "uniform" : "area";
+  rep.candidate_hausdorff = {distance[0].hausdorff, distance[1].hausdorff};
+  if (fit) rep.fitted_hausdorff = {fit_distance[0].hausdorff, fit_distance[1].hausdorff};
+  rep.fitted = use_fit;
+  rep.distance = use_fit ? fit_distance[pick] : distance[pick];
+  if (use_fit) outputs[pick] = std::move(fitted[pick]);
   rep.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (report) *report = rep;
   if (progressive) *progressive = std::move(records[pick]);

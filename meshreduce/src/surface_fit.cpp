@@ -38,14 +38,15 @@ Vec3d normal_of(const std::vector<Vec3d>& p, const FaceCorners& f) {
 }
 
 // Whether moving a face's corners from `before` to `after` keeps it acceptable: it neither
-// turns by 90 degrees or more nor degenerates; it does not turn away from `facing` (the
+// turns by 90 degrees or more (from `before`, nor from the `original` positions before the
+// fit) nor degenerates; it does not turn away from `facing` (the
 // mean normal of the input where it is, zero if unknown) below min(its cosine before,
 // kFacing); and it does not become a needle beyond the bound (or a worse one).
 constexpr double kFacing = 0.5;  // cos 60 degrees
-bool acceptable(const std::vector<Vec3d>& before, const std::vector<Vec3d>& after, const FaceCorners& f, const Vec3d& facing,
-                double max_aspect) {
+bool acceptable(const std::vector<Vec3d>& original, const std::vector<Vec3d>& before, const std::vector<Vec3d>& after, const FaceCorners& f,
+                const Vec3d& facing, double max_aspect) {
   const Vec3d n0 = normal_of(before, f), n1 = normal_of(after, f);
-  if (!(OpenMesh::dot(n0, n1) > 0) || !(n1.sqrnorm() > 0)) return false;
+  if (!(OpenMesh::dot(n0, n1) > 0) || !(OpenMesh::dot(normal_of(original, f), n1) > 0) || !(n1.sqrnorm() > 0)) return false;
   if (facing.sqrnorm() > 0) {
     const double c0 = OpenMesh::dot(n0, facing) / n0.norm(), c1 = OpenMesh::dot(n1, facing) / n1.norm();
     if (c1 < std::min(c0, kFacing)) return false;
@@ -138,6 +139,7 @@ SurfaceFitReport fit_to_surface(Mesh& mesh, const SurfaceFitTarget& target, cons
     double b[3] = {0, 0, 0};
     Vec3d goal{0, 0, 0};
     double weight = 0, distance = 0;
+    int64_t near = -1;  // the nearest triangle last time: the next search's first guess
   };
   // Corners, edge midpoints, centroid and three inner points: where a flat face stands off a
   // curved surface most (corners and edges) as well as inside.
@@ -158,26 +160,36 @@ SurfaceFitReport fit_to_surface(Mesh& mesh, const SurfaceFitTarget& target, cons
   std::vector<Vec3d> facing(faces.size());
   std::vector<Eigen::Triplet<double>> triplets;
   triplets.reserve(9 * faces.size() + static_cast<size_t>(n_free));
-  for (int it = 0; it < options.iterations; ++it) {
+  // The positions whose largest sampled distance (both ways) was the smallest: the
+  // reweighting can overshoot, and the last iterate is not always the best.
+  const std::vector<Vec3d> original = pos;
+  std::vector<Vec3d> best_pos = pos;
+  double best_max = std::numeric_limits<double>::infinity();
+  for (int it = 0; it <= options.iterations; ++it) {
     // Forward: attach every input sample to its closest point on the current output.
     std::vector<Triangle> tris;
     std::vector<int> tri_face;
+    std::vector<int64_t> face_tri(faces.size(), -1);
     tris.reserve(faces.size());
     for (size_t f = 0; f < faces.size(); ++f) {
       const Triangle t{pos[static_cast<size_t>(faces[f].v[0])], pos[static_cast<size_t>(faces[f].v[1])], pos[static_cast<size_t>(faces[f].v[2])]};
       if (t.degenerate()) continue;
+      face_tri[f] = static_cast<int64_t>(tris.size());
       tris.push_back(t);
       tri_face.push_back(static_cast<int>(f));
     }
     if (tris.empty()) break;
     const ClosestTriangles tree(tris);
+    // First guesses (ClosestTriangles::nearest: the answer does not depend on them): the
+    // sample's face last time, else the previous sample's nearest.
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n_forward, 2048), [&](const tbb::blocked_range<size_t>& r) {
       int64_t hint = -1;
       for (size_t i = r.begin(); i < r.end(); ++i) {
         const size_t si = i * stride;
+        Row& row = rows[i];
+        if (row.face >= 0 && face_tri[static_cast<size_t>(row.face)] >= 0) hint = face_tri[static_cast<size_t>(row.face)];
         const auto [d2, id] = tree.nearest(in.points[si], hint);
         hint = id;
-        Row& row = rows[i];
         row.face = -1;
         if (id < 0) continue;
         const Triangle& t = tris[static_cast<size_t>(id)];
@@ -214,8 +226,9 @@ SurfaceFitReport fit_to_surface(Mesh& mesh, const SurfaceFitTarget& target, cons
           row.face = -1;
           if (!(area > 0)) continue;
           const Vec3d x = a * kBackward[j][0] + b * kBackward[j][1] + c * kBackward[j][2];
+          if (row.near >= 0) hint = row.near;
           const auto [d2, id] = in.tree->nearest(x, hint);
-          hint = id;
+          hint = row.near = id;
           if (id < 0) continue;
           const Triangle& t = in.triangles[static_cast<size_t>(id)];
           double w[3];
@@ -228,6 +241,14 @@ SurfaceFitReport fit_to_surface(Mesh& mesh, const SurfaceFitTarget& target, cons
         }
       }
     });
+    double max_distance = 0;
+    for (const Row& row : rows)
+      if (row.face >= 0) max_distance = std::max(max_distance, row.distance);
+    if (max_distance < best_max) {
+      best_max = max_distance;
+      best_pos = pos;
+    }
+    if (it == options.iterations) break;  // the last pass only measures
     // IRLS toward the L_p norm: p from 2 up to options.power over the iterations.
     const double p = options.iterations > 1 ? 2.0 + (options.power - 2.0) * it / (options.iterations - 1) : 2.0;
     double sum_w = 0, sum_wd2 = 0;
@@ -288,13 +309,30 @@ SurfaceFitReport fit_to_surface(Mesh& mesh, const SurfaceFitTarget& target, cons
       const Eigen::Index u = unknown[i];
       next[i] = point(Vec3f(static_cast<float>(solution(u, 0)), static_cast<float>(solution(u, 1)), static_cast<float>(solution(u, 2))));
     }
-    std::vector<uint8_t> check(faces.size(), 1);
+    // A face must also keep facing the input where it lies, as the bench counts flips: its
+    // normal against that of the input triangle nearest its centroid (unless it faced away
+    // before the move too).
+    auto faces_input = [&](const std::vector<Vec3d>& at, const FaceCorners& f) {
+      const Vec3d centroid = (at[static_cast<size_t>(f.v[0])] + at[static_cast<size_t>(f.v[1])] + at[static_cast<size_t>(f.v[2])]) / 3.0;
+      const int64_t id = in.tree->nearest(centroid).second;
+      if (id < 0) return true;
+      const Triangle& t = in.triangles[static_cast<size_t>(id)];
+      return OpenMesh::dot(normal_of(at, f), OpenMesh::cross(t.b - t.a, t.c - t.a)) >= 0;
+    };
+    auto ok = [&](size_t f) {
+      return acceptable(original, pos, next, faces[f], facing[f], options.max_aspect_ratio) &&
+             (faces_input(next, faces[f]) || !faces_input(pos, faces[f]));
+    };
+    std::vector<uint8_t> check(faces.size(), 0);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, faces.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t f = r.begin(); f < r.end(); ++f) check[f] = !ok(f);
+    });
     for (bool changed = true; changed;) {
       changed = false;
       for (size_t f = 0; f < faces.size(); ++f) {
         if (!check[f]) continue;
         check[f] = 0;
-        if (acceptable(pos, next, faces[f], facing[f], options.max_aspect_ratio)) continue;
+        if (ok(f)) continue;
         for (const int v : faces[f].v) {
           const size_t vi = static_cast<size_t>(v);
           if (next[vi] == pos[vi]) continue;
@@ -307,6 +345,7 @@ SurfaceFitReport fit_to_surface(Mesh& mesh, const SurfaceFitTarget& target, cons
     }
     pos = std::move(next);
   }
+  pos = std::move(best_pos);
   for (size_t i = 0; i < nv; ++i)
     if (unknown[i] >= 0)  // exactly representable: rounded to float above
       mesh.set_point(VertexHandle(static_cast<int>(i)), Vec3f(static_cast<float>(pos[i][0]), static_cast<float>(pos[i][1]), static_cast<float>(pos[i][2])));

@@ -37,12 +37,12 @@ struct ProgressiveMesh;  // progressive.hpp
 //    scaled so that seam and boundary planes keep their balance), then the output with the
 //    lower two-sided Hausdorff distance to the input (measure_surface_distance; area wins
 //    ties). Neither weighting is better at every budget on the bench meshes (docs/
-//    benchmarks.md). Then the chosen output's vertices are fitted to the input surface
+//    benchmarks.md). Each candidate's vertices are also fitted to the input surface
 //    (Hoppe et al. 1993's distance energy, two-sided, reweighted toward the largest
 //    distances; meshreduce/src/surface_fit.hpp) except those on boundaries, UV seams and
-//    locks, and the fitted mesh is kept when its measured Hausdorff distance is lower.
-//    Costs: two reductions, three measurements and the fit; the reductions run as parallel
-//    tasks (TBB; the output does not depend on the thread count). With `progressive`, the
+//    locks, and the output is the nearest of the four meshes (ties: unfitted, then area).
+//    Costs: two reductions, two fits and four measurements, as parallel tasks (TBB; the
+//    output does not depend on the thread count). With `progressive`, the
 //    record is the chosen run's (its levels equal that weighting's balanced reduction) and
 //    the output is its last level: no fit; nor with max_normal_deviation below 180 degrees,
 //    which the fit does not check.
@@ -123,10 +123,11 @@ struct ReduceReport {
   // With ReduceQuality::best: the kept output's measured distance to the input, the same
   // as measure_surface_distance(input, output) would give (callers need not measure again).
   std::optional<SurfaceDistance> distance;
-  // With ReduceQuality::best: whether the surface fit was kept, and the Hausdorff distance
-  // the fitted candidate measured (object units; -1 when the fit did not run).
+  // With ReduceQuality::best: whether the output is a fitted candidate, and the Hausdorff
+  // distance of each candidate after the fit (area, uniform; object units; empty when the
+  // fit did not run).
   bool fitted = false;
-  double fit_hausdorff = -1;
+  std::vector<double> fitted_hausdorff;
 };
 
 // Returns the reduced mesh. Guarantees:
