@@ -805,14 +805,20 @@ TEST(CliMeshreduce, QualityPresets) {
     const auto report = nlohmann::json::parse(r.out);
     EXPECT_EQ(report["quality"], q);
     EXPECT_LE(report["output"]["faces"].get<size_t>(), 60u);
-    // best reports its two candidates and which it kept; it is balanced's output when the
-    // area-weighted one is kept.
+    // best reports its two candidates, their fits and which it kept; it is balanced's output
+    // when the unfitted area-weighted one is kept.
     EXPECT_EQ(report.contains("best"), q == "best");
     if (q == "best") {
       const auto& b = report["best"];
-      const bool area = b["hausdorff_area"].get<double>() <= b["hausdorff_uniform"].get<double>();
-      EXPECT_EQ(b["planes"], area ? "area" : "uniform");
-      EXPECT_EQ(test::read_text(d / "best.obj") == test::read_text(d / "balanced.obj"), area);
+      ASSERT_TRUE(b.contains("hausdorff_area_fitted") && b.contains("hausdorff_uniform_fitted"));
+      const double area = b["hausdorff_area"], uniform = b["hausdorff_uniform"];
+      const double fitted = std::min(b["hausdorff_area_fitted"].get<double>(), b["hausdorff_uniform_fitted"].get<double>());
+      EXPECT_EQ(b["fitted"], fitted < std::min(area, uniform));
+      const bool balanced = !b["fitted"].get<bool>() && area <= uniform;
+      if (!b["fitted"].get<bool>()) {
+        EXPECT_EQ(b["planes"], area <= uniform ? "area" : "uniform");
+      }
+      EXPECT_EQ(test::read_text(d / "best.obj") == test::read_text(d / "balanced.obj"), balanced);
     }
   }
   // The default is balanced.
