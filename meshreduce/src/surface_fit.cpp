@@ -37,20 +37,27 @@ Vec3d normal_of(const std::vector<Vec3d>& p, const FaceCorners& f) {
   return OpenMesh::cross(p[static_cast<size_t>(f.v[1])] - a, p[static_cast<size_t>(f.v[2])] - a);
 }
 
+// The mean normals of the input where a face is (unit; zero if unknown): over its own
+// attached samples, and over its corners' faces' samples.
+struct Facing {
+  Vec3d own{0, 0, 0}, ring{0, 0, 0};
+};
+
 // Whether moving a face's corners from `before` to `after` keeps it acceptable: it neither
 // turns by 90 degrees or more (from `before`, nor from the `original` positions before the
-// fit) nor degenerates; it does not turn away from `facing` (the
-// mean normal of the input where it is, zero if unknown) below min(its cosine before,
-// kFacing); and it does not become a needle beyond the bound (or a worse one).
-constexpr double kFacing = 0.5;  // cos 60 degrees
+// fit) nor degenerates; its cosine to facing.own does not fall below min(its cosine before,
+// cos 60 degrees), nor its cosine to facing.ring below min(before, 0); and it does not
+// become a needle beyond the bound (or a worse one).
 bool acceptable(const std::vector<Vec3d>& original, const std::vector<Vec3d>& before, const std::vector<Vec3d>& after, const FaceCorners& f,
-                const Vec3d& facing, double max_aspect) {
+                const Facing& facing, double max_aspect) {
   const Vec3d n0 = normal_of(before, f), n1 = normal_of(after, f);
   if (!(OpenMesh::dot(n0, n1) > 0) || !(OpenMesh::dot(normal_of(original, f), n1) > 0) || !(n1.sqrnorm() > 0)) return false;
-  if (facing.sqrnorm() > 0) {
-    const double c0 = OpenMesh::dot(n0, facing) / n0.norm(), c1 = OpenMesh::dot(n1, facing) / n1.norm();
-    if (c1 < std::min(c0, kFacing)) return false;
-  }
+  auto keeps = [&](const Vec3d& m, double floor) {
+    if (!(m.sqrnorm() > 0)) return true;
+    const double c0 = OpenMesh::dot(n0, m) / n0.norm(), c1 = OpenMesh::dot(n1, m) / n1.norm();
+    return c1 >= std::min(c0, floor);
+  };
+  if (!keeps(facing.own, 0.5) || !keeps(facing.ring, 0.0)) return false;
   if (max_aspect <= 0) return true;
   auto aspect = [&](const std::vector<Vec3d>& p) {
     return aspect_ratio(p[static_cast<size_t>(f.v[0])], p[static_cast<size_t>(f.v[1])], p[static_cast<size_t>(f.v[2])]);
@@ -141,15 +148,13 @@ SurfaceFitReport fit_to_surface(Mesh& mesh, const SurfaceFitTarget& target, cons
     double weight = 0, distance = 0;
     int64_t near = -1;  // the nearest triangle last time: the next search's first guess
   };
-  // Corners, edge midpoints, centroid and three inner points: where a flat face stands off a
-  // curved surface most (corners and edges) as well as inside.
-  static constexpr int kBackwardPoints = 10;
-  static constexpr double kBackward[kBackwardPoints][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0.5, 0.5, 0}, {0, 0.5, 0.5}, {0.5, 0, 0.5},
-                                                           {1.0 / 3, 1.0 / 3, 1.0 / 3}, {2.0 / 3, 1.0 / 6, 1.0 / 6}, {1.0 / 6, 2.0 / 3, 1.0 / 6}, {1.0 / 6, 1.0 / 6, 2.0 / 3}};
-  // Forward rows: every stride-th input sample, weighted by the stride, about
-  // samples_per_face per output face (the input's samples are many more than a coarse
-  // output needs, and each costs a closest-point query per iteration).
-  const size_t stride = std::max<size_t>(1, in.points.size() / std::max<size_t>(1, options.samples_per_face * faces.size()));
+  // Corners, edge midpoints and centroid: where a flat face stands off a curved surface
+  // most (corners and edges) and its middle.
+  static constexpr int kBackwardPoints = 7, kCentroid = 6;
+  static constexpr double kBackward[kBackwardPoints][3] = {{1, 0, 0},     {0, 1, 0},     {0, 0, 1},          {0.5, 0.5, 0},
+                                                           {0, 0.5, 0.5}, {0.5, 0, 0.5}, {1.0 / 3, 1.0 / 3, 1.0 / 3}};
+  // Forward rows: every stride-th input sample, weighted by the stride, about max_samples.
+  const size_t stride = std::max<size_t>(1, (in.points.size() + options.max_samples - 1) / std::max<size_t>(1, options.max_samples));
   const size_t n_forward = (in.points.size() + stride - 1) / stride;
   std::vector<Row> rows(n_forward + kBackwardPoints * faces.size());
   struct FaceBlock {
@@ -157,7 +162,7 @@ SurfaceFitReport fit_to_surface(Mesh& mesh, const SurfaceFitTarget& target, cons
     Vec3d goal[3] = {Vec3d(0, 0, 0), Vec3d(0, 0, 0), Vec3d(0, 0, 0)};
   };
   std::vector<FaceBlock> block(faces.size());
-  std::vector<Vec3d> facing(faces.size());
+  std::vector<Facing> facing(faces.size());
   std::vector<Eigen::Triplet<double>> triplets;
   triplets.reserve(9 * faces.size() + static_cast<size_t>(n_free));
   // The positions whose largest sampled distance (both ways) was the smallest: the
@@ -206,12 +211,22 @@ SurfaceFitReport fit_to_surface(Mesh& mesh, const SurfaceFitTarget& target, cons
         row.distance = std::sqrt(d2);
       }
     });
-    // What each face stands for: the mean normal of the input samples attached to it.
-    std::fill(facing.begin(), facing.end(), Vec3d(0, 0, 0));
+    // Which way the input faces where each face is: the mean normal of the input samples
+    // attached to it, and of those attached to it and the faces sharing a corner with it (a
+    // face's own samples can all lie on one side of a ridge; its neighbourhood's see the
+    // surface it belongs to).
+    std::vector<Vec3d> own(faces.size(), Vec3d(0, 0, 0));
     for (size_t i = 0; i < n_forward; ++i)
-      if (rows[i].face >= 0) facing[static_cast<size_t>(rows[i].face)] += rows[i].weight * in.normals[i * stride];
-    for (Vec3d& m : facing)
-      if (m.sqrnorm() > 0) m /= m.norm();
+      if (rows[i].face >= 0) own[static_cast<size_t>(rows[i].face)] += rows[i].weight * in.normals[i * stride];
+    std::vector<Vec3d> around(nv, Vec3d(0, 0, 0));
+    for (size_t f = 0; f < faces.size(); ++f)
+      for (const int v : faces[f].v) around[static_cast<size_t>(v)] += own[f];
+    for (size_t f = 0; f < faces.size(); ++f) {
+      Vec3d m(0, 0, 0);
+      for (const int v : faces[f].v) m += around[static_cast<size_t>(v)];
+      facing[f].own = own[f].sqrnorm() > 0 ? Vec3d(own[f] / own[f].norm()) : Vec3d(0, 0, 0);
+      facing[f].ring = m.sqrnorm() > 0 ? Vec3d(m / m.norm()) : Vec3d(0, 0, 0);
+    }
     // Backward: points of each output face to their closest points on the input.
     tbb::parallel_for(tbb::blocked_range<size_t>(0, faces.size(), 512), [&](const tbb::blocked_range<size_t>& r) {
       int64_t hint = -1;
@@ -224,7 +239,10 @@ SurfaceFitReport fit_to_surface(Mesh& mesh, const SurfaceFitTarget& target, cons
         for (int j = 0; j < kBackwardPoints; ++j) {
           Row& row = rows[n_forward + kBackwardPoints * f + static_cast<size_t>(j)];
           row.face = -1;
-          if (!(area > 0)) continue;
+          if (!(area > 0)) {
+            row.near = -1;
+            continue;
+          }
           const Vec3d x = a * kBackward[j][0] + b * kBackward[j][1] + c * kBackward[j][2];
           if (row.near >= 0) hint = row.near;
           const auto [d2, id] = in.tree->nearest(x, hint);
@@ -312,16 +330,20 @@ SurfaceFitReport fit_to_surface(Mesh& mesh, const SurfaceFitTarget& target, cons
     // A face must also keep facing the input where it lies, as the bench counts flips: its
     // normal against that of the input triangle nearest its centroid (unless it faced away
     // before the move too).
-    auto faces_input = [&](const std::vector<Vec3d>& at, const FaceCorners& f) {
-      const Vec3d centroid = (at[static_cast<size_t>(f.v[0])] + at[static_cast<size_t>(f.v[1])] + at[static_cast<size_t>(f.v[2])]) / 3.0;
-      const int64_t id = in.tree->nearest(centroid).second;
+    // (The centroid's backward row holds the input triangle nearest it before the move: the
+    // answer for `pos`, and the first guess for `next`.)
+    auto faces_input = [&](bool moved, size_t f) {
+      const std::vector<Vec3d>& at = moved ? next : pos;
+      const FaceCorners& fc = faces[f];
+      const Vec3d centroid = (at[static_cast<size_t>(fc.v[0])] + at[static_cast<size_t>(fc.v[1])] + at[static_cast<size_t>(fc.v[2])]) / 3.0;
+      const int64_t before = rows[n_forward + kBackwardPoints * f + kCentroid].near;
+      const int64_t id = !moved && before >= 0 ? before : in.tree->nearest(centroid, before).second;
       if (id < 0) return true;
       const Triangle& t = in.triangles[static_cast<size_t>(id)];
-      return OpenMesh::dot(normal_of(at, f), OpenMesh::cross(t.b - t.a, t.c - t.a)) >= 0;
+      return OpenMesh::dot(normal_of(at, fc), OpenMesh::cross(t.b - t.a, t.c - t.a)) >= 0;
     };
     auto ok = [&](size_t f) {
-      return acceptable(original, pos, next, faces[f], facing[f], options.max_aspect_ratio) &&
-             (faces_input(next, faces[f]) || !faces_input(pos, faces[f]));
+      return acceptable(original, pos, next, faces[f], facing[f], options.max_aspect_ratio) && (faces_input(true, f) || !faces_input(false, f));
     };
     std::vector<uint8_t> check(faces.size(), 0);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, faces.size(), 256), [&](const tbb::blocked_range<size_t>& r) {

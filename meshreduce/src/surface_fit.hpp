@@ -52,8 +52,9 @@ struct SurfaceFitOptions {
   // the L_power norm, which leans toward the largest distances (the Hausdorff distance is
   // the L_infinity one).
   double power = 5.0;
-  // Input samples used per output face (at most all of them).
-  size_t samples_per_face = 128;
+  // Input samples used: about this many (every k-th, weighted by k; all when fewer), each
+  // costing a closest-point query per iteration.
+  size_t max_samples = 50000;
   // As ReduceOptions::max_aspect_ratio: a move may not make a face a needle beyond this
   // (unless it already was one). 0: off.
   float max_aspect_ratio = 40.0f;
