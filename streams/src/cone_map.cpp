@@ -527,7 +527,9 @@ class ConeSearch {
       std::array<double, 4> e;
       int depth;
     };
-    std::array<Arc, 2 * kArcDepth + 2> stack{};
+    // Not value-initialised: entries are written before they are read, and zeroing the 50
+    // entries (2 kB per arc) cost 1.2 % of the instructions of relaxed bricks at 256².
+    std::array<Arc, 2 * kArcDepth + 2> stack;
     int top = 0;
     stack[static_cast<size_t>(top++)] = {whole, 0};
     while (top > 0) {
