@@ -902,6 +902,21 @@ constexpr Mask kColumn = [] {
   return m;
 }();
 constexpr Mask kRow = (Mask{1} << kBlock) - 1;
+// Per column (or row) of a block, a squared gap.
+using Gaps = std::array<double, kBlock>;
+// The squared gaps from the block's columns (rows) [t0 + c, t0 + c + 1] to [a0, a1]:
+// gap() = max(t0 + c - a1, a0 - t0 - c - 1, 0), the same values (all are whole numbers,
+// exact in double) from two differences.
+inline Gaps squared_gaps(int t0, double a0, double a1) {
+  const double after = t0 - a1, before = a0 - t0 - 1.0;
+  Gaps g;
+  for (size_t c = 0; c < kBlock; ++c) {
+    const double gp = std::max(std::max(after + static_cast<double>(c), before - static_cast<double>(c)), 0.0);
+    g[c] = gp * gp;
+  }
+  return g;
+}
+
 // A texel's 8 neighbours, the sides first.
 constexpr std::array<std::pair<int, int>, 8> kNeighbours = {{{-1, 0}, {1, 0}, {0, -1}, {0, 1}, {-1, -1}, {1, -1}, {-1, 1}, {1, 1}}};
 
@@ -978,6 +993,9 @@ class BlockSearch {
     float m;    // the node's maximum
     Mask mask;  // the block's texels for which it may hold a steeper point
     double d;   // distance to the block's footprint
+    // The squared gaps from the block's columns and rows to the node, computed once by the
+    // parent (which needs them to test it) for the test when it is popped.
+    Gaps gx2, gy2;
   };
 
   // Under the cone of the slope found: nothing to gain. Under the cone of that slope
@@ -1021,8 +1039,8 @@ class BlockSearch {
   // block) first.
   void visit(const Block& b, const PerTexel& top, const PerTexel& cap, std::vector<ConeSearch>& s, double ox, double oy, Mask mask0) {
     stack_.clear();
-    stack_.push_back({root_, 0, 0, static_cast<float>(global_max_), mask0, rect_distance(Rect{ox, oy, ox + w_, oy + h_}, b.f)});
-    std::array<double, kBlock> gx2{}, gy2{};
+    stack_.push_back({root_, 0, 0, static_cast<float>(global_max_), mask0, rect_distance(Rect{ox, oy, ox + w_, oy + h_}, b.f),
+                      squared_gaps(b.i0, ox, ox + w_), squared_gaps(b.j0, oy, oy + h_)});
     PerTexel level{}, level2{};
     while (!stack_.empty() && live_ != 0) {
       const Node n = stack_.back();
@@ -1034,15 +1052,6 @@ class BlockSearch {
                    ox + std::min(static_cast<double>(n.x + 1) * size, static_cast<double>(w_)),
                    oy + std::min(static_cast<double>(n.y + 1) * size, static_cast<double>(h_))};
       const double size2 = static_cast<double>(size) * size;
-      // Squared gaps from each column and row of the block's texels to the node.
-      for (int c = 0; c < b.bw; ++c) {
-        const double gp = gap(b.i0 + c, b.i0 + c + 1.0, r.x0, r.x1);
-        gx2[static_cast<size_t>(c)] = gp * gp;
-      }
-      for (int c = 0; c < b.bh; ++c) {
-        const double gp = gap(b.j0 + c, b.j0 + c + 1.0, r.y0, r.y1);
-        gy2[static_cast<size_t>(c)] = gp * gp;
-      }
       // A node no higher than the apex, or whose maximum over its nearest distance is no
       // steeper than the slope already found (the value returned, level()), cannot change
       // that texel's answer: (m - T) <= level d, squared (both sides >= 0).
@@ -1051,7 +1060,7 @@ class BlockSearch {
         const size_t uk = static_cast<size_t>(k);
         const double e = m - top[uk];
         if (e <= 0) continue;
-        const double d2 = gx2[static_cast<size_t>(k & (kBlock - 1))] + gy2[static_cast<size_t>(k >> kBlockLog)];
+        const double d2 = n.gx2[static_cast<size_t>(k & (kBlock - 1))] + n.gy2[static_cast<size_t>(k >> kBlockLog)];
         level[uk] = s[uk].level();
         level2[uk] = level[uk] * level[uk];
         if (d2 > 0) {
@@ -1101,25 +1110,22 @@ class BlockSearch {
       const int cs = 1 << l, kw = tree_.w[static_cast<size_t>(l)], kh = tree_.h[static_cast<size_t>(l)];
       const float* kid_max = tree_.level[static_cast<size_t>(l)].data();
       const int cx0 = 2 * n.x, cx1 = std::min(2 * n.x + 1, kw - 1), cy0 = 2 * n.y, cy1 = std::min(2 * n.y + 1, kh - 1);
-      std::array<std::array<double, kBlock>, 2> kgx2{}, kgy2{};
-      std::array<double, 2> bgx{}, bgy{};  // gaps to the block's footprint
+      std::array<Gaps, 2> kgx2, kgy2;
+      std::array<double, 2> bgx, bgy;  // gaps to the block's footprint
       // Along one axis: the squared gaps from each of the block's texel columns (rows) to
       // the children's cells k0..k1 (origin o, cells cs wide, clipped at `extent`), and the
       // gap from the block's footprint [f0, f1].
-      auto axis_gaps = [&](int k0, int k1, double o, double extent, int t0, int texels, double f0, double f1,
-                           std::array<std::array<double, kBlock>, 2>& g2, std::array<double, 2>& bg) {
+      auto axis_gaps = [&](int k0, int k1, double o, double extent, int t0, double f0, double f1, std::array<Gaps, 2>& g2,
+                           std::array<double, 2>& bg) {
         for (int k = k0; k <= k1; ++k) {
           const double a0 = o + static_cast<double>(k) * cs, a1 = o + std::min(static_cast<double>(k + 1) * cs, extent);
           const size_t u = static_cast<size_t>(k - k0);
-          for (int c = 0; c < texels; ++c) {
-            const double gp = gap(t0 + c, t0 + c + 1.0, a0, a1);
-            g2[u][static_cast<size_t>(c)] = gp * gp;
-          }
+          g2[u] = squared_gaps(t0, a0, a1);
           bg[u] = gap(f0, f1, a0, a1);
         }
       };
-      axis_gaps(cx0, cx1, ox, static_cast<double>(w_), b.i0, b.bw, b.f.x0, b.f.x1, kgx2, bgx);
-      axis_gaps(cy0, cy1, oy, static_cast<double>(h_), b.j0, b.bh, b.f.y0, b.f.y1, kgy2, bgy);
+      axis_gaps(cx0, cx1, ox, static_cast<double>(w_), b.i0, b.f.x0, b.f.x1, kgx2, bgx);
+      axis_gaps(cy0, cy1, oy, static_cast<double>(h_), b.j0, b.f.y0, b.f.y1, kgy2, bgy);
       for (int cy = cy0; cy <= cy1; ++cy)
         for (int cx = cx0; cx <= cx1; ++cx) {
           const float km = kid_max[static_cast<size_t>(cy) * static_cast<size_t>(kw) + static_cast<size_t>(cx)];
@@ -1134,13 +1140,17 @@ class BlockSearch {
             if (d2 > 0 && e * e <= level2[static_cast<size_t>(k)] * d2) continue;
             kid |= Mask{1} << k;
           }
-          if (kid != 0) kids[static_cast<size_t>(count++)] = Node{l, cx, cy, km, kid, length(bgx[static_cast<size_t>(cx - cx0)], bgy[static_cast<size_t>(cy - cy0)])};
+          if (kid != 0) {
+            const size_t ux = static_cast<size_t>(cx - cx0), uy = static_cast<size_t>(cy - cy0);
+            kids[static_cast<size_t>(count++)] = Node{l, cx, cy, km, kid, length(bgx[ux], bgy[uy]), kgx2[ux], kgy2[uy]};
+          }
         }
-      // Farthest pushed first, so the nearest is searched first (insertion sort of <= 4).
-      for (int a = 1; a < count; ++a)
-        for (int c = a; c > 0 && kids[static_cast<size_t>(c - 1)].d < kids[static_cast<size_t>(c)].d; --c)
-          std::swap(kids[static_cast<size_t>(c - 1)], kids[static_cast<size_t>(c)]);
-      for (int k = 0; k < count; ++k) stack_.push_back(kids[static_cast<size_t>(k)]);
+      // Farthest pushed first, so the nearest is searched first (insertion sort of <= 4, of
+      // indices: a node is 96 bytes).
+      std::array<size_t, 4> order = {0, 1, 2, 3};
+      for (size_t a = 1; a < static_cast<size_t>(count); ++a)
+        for (size_t c = a; c > 0 && kids[order[c - 1]].d < kids[order[c]].d; --c) std::swap(order[c - 1], order[c]);
+      for (size_t k = 0; k < static_cast<size_t>(count); ++k) stack_.push_back(kids[order[k]]);
     }
   }
 
