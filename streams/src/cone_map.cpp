@@ -39,14 +39,36 @@ struct HalfGrid {
   float at(int a, int b) const { return v[static_cast<size_t>(b) * static_cast<size_t>(gw) + static_cast<size_t>(a)]; }
 };
 
+// Grid point a along an axis is S at pixel a / 2: between texels (a - 1) div 2 and the next,
+// at fraction 0 (a odd, a texel centre) or 1/2 (a even, an edge), exactly as bilinear()
+// finds them from floor(a / 2 - 1/2).
+inline int grid_texel(int a) { return (a + 1) / 2 - 1; }  // a >= 0
+inline float grid_fraction(int a) { return (a & 1) != 0 ? 0.0f : 0.5f; }
+
 HalfGrid half_grid(const HeightField& f) {
+  const int w = f.height.width, h = f.height.height;
+  // The texels with a border of one, as the border rule reads them: S(a / 2, b / 2) is
+  // f.bilinear(a / 2, b / 2) bit for bit, without its floor and four addressed lookups
+  // per grid point (3 % of the build at 256²).
+  const int pw = w + 2;
+  std::vector<float> padded(static_cast<size_t>(pw) * static_cast<size_t>(h + 2));
+  for (int y = -1; y <= h; ++y)
+    for (int x = -1; x <= w; ++x) padded[static_cast<size_t>(y + 1) * static_cast<size_t>(pw) + static_cast<size_t>(x + 1)] = f.texel(x, y);
+  auto at = [&](int x, int y) { return padded[static_cast<size_t>(y + 1) * static_cast<size_t>(pw) + static_cast<size_t>(x + 1)]; };
   HalfGrid g;
-  g.gw = 2 * f.height.width + 1;
-  g.gh = 2 * f.height.height + 1;
+  g.gw = 2 * w + 1;
+  g.gh = 2 * h + 1;
   g.v.resize(static_cast<size_t>(g.gw) * static_cast<size_t>(g.gh));
   tbb::parallel_for(tbb::blocked_range<int>(0, g.gh), [&](const tbb::blocked_range<int>& rows) {
-    for (int b = rows.begin(); b < rows.end(); ++b)
-      for (int a = 0; a < g.gw; ++a) g.v[static_cast<size_t>(b) * static_cast<size_t>(g.gw) + static_cast<size_t>(a)] = f.bilinear(0.5 * a, 0.5 * b);
+    for (int b = rows.begin(); b < rows.end(); ++b) {
+      const int y = grid_texel(b);
+      const float ty = grid_fraction(b);
+      for (int a = 0; a < g.gw; ++a) {
+        const int x = grid_texel(a);
+        g.v[static_cast<size_t>(b) * static_cast<size_t>(g.gw) + static_cast<size_t>(a)] =
+            bilinear_blend(at(x, y), at(x + 1, y), at(x, y + 1), at(x + 1, y + 1), grid_fraction(a), ty);
+      }
+    }
   });
   return g;
 }
