@@ -129,11 +129,20 @@ class ConeSearch {
     zx_ = p.x0 >= f_.x1 ? 1 : (px1 <= f_.x0 ? -1 : 0);
     zy_ = p.y0 >= f_.y1 ? 1 : (py1 <= f_.y0 ? -1 : 0);
     if (zx_ == 0 && zy_ == 0) return;  // inside F, where S <= T
-    if (zx_ != 0 && zy_ != 0) {
-      // Corner zone: the nearest point of F is its corner c; the piece touches c when one of
-      // its corners is c (local coordinates sc, tc).
+    const std::array<double, 4> v = {p.value(0, 0), p.value(1, 0), p.value(0, 1), p.value(1, 1)};
+    if (zx_ == 0 || zy_ == 0) {
+      // refine()'s first test, which ends most pieces, here without its call: the exact
+      // supremum over a side piece.
+      if (side_upper(p, 0, 0, 1, 1, v) <= level()) return;
+    } else {
+      // Corner zone: the nearest point of F is its corner c.
       cx_ = zx_ > 0 ? f_.x1 : f_.x0;
       cy_ = zy_ > 0 ? f_.y1 : f_.y0;
+      // refine()'s first test here too, before the corner's setup (a piece that touches c, at
+      // distance 0, goes on: it may hold the limit at c).
+      const double near = nearest(p, 0, 0, 1, 1);
+      if (near > 0 && std::max(std::max(v[0], v[1]), std::max(v[2], v[3])) - top_ <= level() * near) return;
+      // The piece touches c when one of its corners is c (local coordinates sc, tc).
       touches_ = (cx_ == p.x0 || cx_ == px1) && (cy_ == p.y0 || cy_ == py1);
       sc_ = 2 * (cx_ - p.x0);
       tc_ = 2 * (cy_ - p.y0);
@@ -149,7 +158,7 @@ class ConeSearch {
       boundary_max_ = !(p.value(sc_, tc_) < top_ && p.e * zx_ * zy_ < 0);
     }
     if (zx_ != 0 && zy_ != 0 && touches_ && p.value(sc_, tc_) >= top_) attain_corner_limit(p);
-    refine(p, 0, 0, 1, 1, {p.value(0, 0), p.value(1, 0), p.value(0, 1), p.value(1, 1)}, 0xf, 0);
+    refine(p, 0, 0, 1, 1, v, 0xf, 0);
   }
 
  private:
