@@ -244,6 +244,29 @@ class ConeSearch {
     double x = 0, y = 0, v = 0, gx = 0, gy = 0;
     bool valid = false;
   } best;
+  // Conservative cones, texel (x, y) of the grid's map shifted by (ox, oy) pixels, in F's row
+  // or column but not F: the supremum of psi over it, exactly and attained, without its
+  // pieces. The gap to F is along one axis, so as in side_upper: along a column of the texel
+  // the gap is constant and S linear on each piece, along a row (S - T) / gap is monotone on
+  // each piece, and where the row leaves F's edge (gap 0, S <= T) it is at most its value
+  // half a texel on. So the largest (S - T) / gap over the 3 x 3 grid points at a positive
+  // gap is the supremum. (The gradient of a seed is read by relaxed cones only.)
+  void side_texel(const HalfGrid& g, int x, int y, double ox, double oy) {
+    const double px = ox + x, py = oy + y;
+    const bool in_row = py == f_.y0;  // else in F's column: the gap is along y
+    for (int r = 0; r <= 2; ++r)
+      for (int c = 0; c <= 2; ++c) {
+        const double v = g.at(2 * x + c, 2 * y + r);
+        if (v <= top_) continue;
+        const double qx = px + 0.5 * c, qy = py + 0.5 * r;
+        const double d = in_row ? std::max(qx - f_.x1, f_.x0 - qx) : std::max(qy - f_.y1, f_.y0 - qy);
+        if (d > 0 && (v - top_) / d > psi) {
+          psi = (v - top_) / d;
+          best = {qx, qy, v, 0, 0, true};
+        }
+      }
+  }
+
   void seed(const Point& q) {
     if (!q.valid) return;
     const double d = distance(q.x, q.y);
@@ -1060,6 +1083,10 @@ class BlockSearch {
         const int x = i + dx, y = j + dy;
         if (x < 0 || y < 0 || x >= w_ || y >= h_ || !(tree_.at(0, x, y) > top[uk]) || !(s[uk].psi < cap[uk])) continue;
         if (relaxed && rises_away(leaves_.box(x, y), Rect{static_cast<double>(x), static_cast<double>(y), x + 1.0, y + 1.0}, footprint_[uk])) continue;
+        if (!relaxed && (dx == 0 || dy == 0)) {
+          s[uk].side_texel(grid_, x, y, 0, 0);
+          continue;
+        }
         for (int bb = 2 * y; bb <= 2 * y + 1; ++bb)
           for (int a = 2 * x; a <= 2 * x + 1; ++a) s[uk].piece(piece(0, 0, a, bb));
       }
@@ -1201,7 +1228,11 @@ class BlockSearch {
                                        piece(ox, oy, 2 * n.x + 1, 2 * n.y + 1)};
         for (Mask q = keep; q != 0; q &= q - 1) {
           const size_t k = static_cast<size_t>(low_bit(q));
-          for (const Piece& p : pieces) s[k].piece(p);
+          if (!relaxed_ && (r.x0 == footprint_[k].x0 || r.y0 == footprint_[k].y0)) {
+            s[k].side_texel(grid_, n.x, n.y, ox, oy);
+          } else {
+            for (const Piece& p : pieces) s[k].piece(p);
+          }
           if (!(s[k].psi < cap[k])) live_ &= ~(Mask{1} << k);
         }
         continue;
