@@ -172,7 +172,8 @@ class ConeSearch {
     return length(dx, dy);
   }
   // The same for a point of the current piece, whose zone fixes the form: the gap along one
-  // axis beside F (no square root), the distance to the corner c off it.
+  // axis beside F (no square root), the distance to the corner c off it. The same values,
+  // bit for bit (a correctly rounded square root of a rounded square is the number).
   double piece_distance(double x, double y) const {
     if (zy_ == 0) return std::max(zx_ > 0 ? x - f_.x1 : f_.x0 - x, 0.0);
     if (zx_ == 0) return std::max(zy_ > 0 ? y - f_.y1 : f_.y0 - y, 0.0);
@@ -600,7 +601,7 @@ class ConeSearch {
       double upper, near;
       if (zx_ == 0 || zy_ == 0) {
         upper = side_upper(p, bs0, bt0, bs1, bt1, v);
-        near = std::min(distance(p.x(bs0), p.y(bt0)), distance(p.x(bs1), p.y(bt1)));  // dist is monotone across the box
+        near = std::min(piece_distance(p.x(bs0), p.y(bt0)), piece_distance(p.x(bs1), p.y(bt1)));  // dist is monotone across the box
       } else {
         const double vmax = std::max({v[0], v[1], v[2], v[3]});
         near = nearest(p, bs0, bt0, bs1, bt1);
@@ -632,7 +633,7 @@ class ConeSearch {
       // The half nearer F last, so searched first: bounds grow toward F, and once the
       // largest is kept the rest of the arc is dismissed against it.
       const Arc first{{a.e[0], a.e[1], sm, tm}, a.depth + 1}, second{{sm, tm, a.e[2], a.e[3]}, a.depth + 1};
-      const bool first_nearer = distance(p.x(a.e[0]), p.y(a.e[1])) < distance(p.x(a.e[2]), p.y(a.e[3]));
+      const bool first_nearer = piece_distance(p.x(a.e[0]), p.y(a.e[1])) < piece_distance(p.x(a.e[2]), p.y(a.e[3]));
       stack[static_cast<size_t>(top++)] = first_nearer ? second : first;
       stack[static_cast<size_t>(top++)] = first_nearer ? first : second;
     }
