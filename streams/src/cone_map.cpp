@@ -1222,6 +1222,15 @@ class BlockSearch {
           apart &= keep;
           if (keep == 0) continue;
         }
+        // Conservative cones take a leaf in a texel's row or column whole (side_texel), for
+        // less than its plane test costs.
+        Mask whole = 0;
+        if (!relaxed_)
+          for (Mask q = keep; q != 0; q &= q - 1) {
+            const size_t k = static_cast<size_t>(low_bit(q));
+            if (r.x0 == footprint_[k].x0 || r.y0 == footprint_[k].y0) whole |= Mask{1} << k;
+          }
+        apart &= ~whole;
         if (apart != 0) keep = planes(leaves_.plane(n.x, n.y), r, top, s, keep, apart);
         if (keep != 0 && relaxed_) keep = rising(leaves_.box(n.x, n.y), r, b, keep);
         if (keep == 0) continue;
@@ -1229,7 +1238,7 @@ class BlockSearch {
                                        piece(ox, oy, 2 * n.x + 1, 2 * n.y + 1)};
         for (Mask q = keep; q != 0; q &= q - 1) {
           const size_t k = static_cast<size_t>(low_bit(q));
-          if (!relaxed_ && (r.x0 == footprint_[k].x0 || r.y0 == footprint_[k].y0)) {
+          if ((whole >> k) & 1) {
             s[k].side_texel(grid_, n.x, n.y, ox, oy);
           } else {
             for (const Piece& p : pieces) s[k].piece(p);
