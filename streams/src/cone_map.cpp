@@ -245,27 +245,33 @@ class ConeSearch {
     double x = 0, y = 0, v = 0, gx = 0, gy = 0;
     bool valid = false;
   } best;
-  // Conservative cones, texel (x, y) of the grid's map shifted by (ox, oy) pixels, in F's row
-  // or column but not F: the supremum of psi over it, exactly and attained, without its
-  // pieces. The gap to F is along one axis, so as in side_upper: along a column of the texel
-  // the gap is constant and S linear on each piece, along a row (S - T) / gap is monotone on
-  // each piece, and where the row leaves F's edge (gap 0, S <= T) it is at most its value
-  // half a texel on. So the largest (S - T) / gap over the 3 x 3 grid points at a positive
-  // gap is the supremum. (The gradient of a seed is read by relaxed cones only.)
-  void side_texel(const HalfGrid& g, int x, int y, double ox, double oy) {
+  // Texel (x, y) of the grid's map shifted by (ox, oy) pixels, in F's row or column but not
+  // F: the supremum of psi over every point of it, without its pieces. The gap to F is along
+  // one axis, so as in side_upper: along a column of the texel the gap is constant and S
+  // linear on each piece, along a row (S - T) / gap is monotone on each piece, and where the
+  // row leaves F's edge (gap 0, S <= T) it is at most its value half a texel on. So the
+  // largest (S - T) / gap over the 3 x 3 grid points at a positive gap is the supremum.
+  // Conservative cones attain it (the gradient of a seed is read by relaxed cones only): the
+  // texel is settled. For relaxed ones it bounds the supremum over the points seen
+  // descending: settled (dismissed) when no steeper than the level, else its pieces decide.
+  bool side_texel_settles(const HalfGrid& g, int x, int y, double ox, double oy) {
     const double px = ox + x, py = oy + y;
     const bool in_row = py == f_.y0;  // else in F's column: the gap is along y
+    double upper = relaxed_ ? 0.0 : psi;  // conservative cones raise psi itself
     for (int r = 0; r <= 2; ++r)
       for (int c = 0; c <= 2; ++c) {
         const double v = g.at(2 * x + c, 2 * y + r);
         if (v <= top_) continue;
         const double qx = px + 0.5 * c, qy = py + 0.5 * r;
         const double d = in_row ? std::max(qx - f_.x1, f_.x0 - qx) : std::max(qy - f_.y1, f_.y0 - qy);
-        if (d > 0 && (v - top_) / d > psi) {
-          psi = (v - top_) / d;
+        if (!(d > 0) || !((v - top_) / d > upper)) continue;
+        upper = (v - top_) / d;
+        if (!relaxed_) {
+          psi = upper;
           best = {qx, qy, v, 0, 0, true};
         }
       }
+    return !relaxed_ || upper <= level();
   }
 
   void seed(const Point& q) {
@@ -1084,10 +1090,7 @@ class BlockSearch {
         const int x = i + dx, y = j + dy;
         if (x < 0 || y < 0 || x >= w_ || y >= h_ || !(tree_.at(0, x, y) > top[uk]) || !(s[uk].psi < cap[uk])) continue;
         if (relaxed && rises_away(leaves_.box(x, y), Rect{static_cast<double>(x), static_cast<double>(y), x + 1.0, y + 1.0}, footprint_[uk])) continue;
-        if (!relaxed && (dx == 0 || dy == 0)) {
-          s[uk].side_texel(grid_, x, y, 0, 0);
-          continue;
-        }
+        if ((dx == 0 || dy == 0) && s[uk].side_texel_settles(grid_, x, y, 0, 0)) continue;
         for (int bb = 2 * y; bb <= 2 * y + 1; ++bb)
           for (int a = 2 * x; a <= 2 * x + 1; ++a) s[uk].piece(piece(0, 0, a, bb));
       }
@@ -1222,15 +1225,14 @@ class BlockSearch {
           apart &= keep;
           if (keep == 0) continue;
         }
-        // Conservative cones take a leaf in a texel's row or column whole (side_texel), for
-        // less than its plane test costs.
+        // A leaf in a texel's row or column is taken whole first (side_texel_settles):
+        // conservative cones then need no plane test, which costs more.
         Mask whole = 0;
-        if (!relaxed_)
-          for (Mask q = keep; q != 0; q &= q - 1) {
-            const size_t k = static_cast<size_t>(low_bit(q));
-            if (r.x0 == footprint_[k].x0 || r.y0 == footprint_[k].y0) whole |= Mask{1} << k;
-          }
-        apart &= ~whole;
+        for (Mask q = keep; q != 0; q &= q - 1) {
+          const size_t k = static_cast<size_t>(low_bit(q));
+          if (r.x0 == footprint_[k].x0 || r.y0 == footprint_[k].y0) whole |= Mask{1} << k;
+        }
+        if (!relaxed_) apart &= ~whole;
         if (apart != 0) keep = planes(leaves_.plane(n.x, n.y), r, top, s, keep, apart);
         if (keep != 0 && relaxed_) keep = rising(leaves_.box(n.x, n.y), r, b, keep);
         if (keep == 0) continue;
@@ -1238,11 +1240,8 @@ class BlockSearch {
                                        piece(ox, oy, 2 * n.x + 1, 2 * n.y + 1)};
         for (Mask q = keep; q != 0; q &= q - 1) {
           const size_t k = static_cast<size_t>(low_bit(q));
-          if ((whole >> k) & 1) {
-            s[k].side_texel(grid_, n.x, n.y, ox, oy);
-          } else {
+          if (!((whole >> k) & 1) || !s[k].side_texel_settles(grid_, n.x, n.y, ox, oy))
             for (const Piece& p : pieces) s[k].piece(p);
-          }
           if (!(s[k].psi < cap[k])) live_ &= ~(Mask{1} << k);
         }
         continue;
