@@ -329,23 +329,24 @@ class ConeSearch {
     } else {
       // First the plain bound (max S - T) / (nearest distance): most pieces end here.
       if (vmax - top_ <= level() * nearest(p, s0, t0, s1, t1)) return;
+      // Then one bound over every point (the direction to the rectangle's centre, see
+      // corner_upper, which starts with it), cheaper than the descent tests and the eight
+      // evaluations below when it settles the rectangle.
+      if (!touches_) {
+        const double ux = p.x(s0) + p.x(s1) - 2 * cx_, uy = p.y(t0) + p.y(t1) - 2 * cy_;
+        const double n = length(ux, uy);
+        double b = 0;
+        for (int k = 0; k < 4 && b <= level(); ++k) {
+          const double l = (ux * (p.x(ss[k]) - cx_) + uy * (p.y(ts[k]) - cy_)) / n;  // u . (y - c), u the unit direction to the centre
+          b = l > 0 ? std::max(b, (v[k] - top_) / l) : kInf;
+        }
+        if (b <= level()) return;
+      }
       if (relaxed_ && never_descends(p, s0, t0, s1, t1)) return;
       if (boundary_max_) {
         // The supremum is on the boundary (of the rectangle, or for relaxed cones of its part
         // seen descending), where it is computed exactly.
         if (!relaxed_ || descends_throughout(p, s0, t0, s1, t1)) {
-          // One bound first (the direction to the rectangle's centre, see corner_upper),
-          // cheaper than the eight evaluations below when it settles the rectangle.
-          if (!touches_) {
-            const double ux = p.x(s0) + p.x(s1) - 2 * cx_, uy = p.y(t0) + p.y(t1) - 2 * cy_;
-            const double n = length(ux, uy);
-            double b = 0;
-            for (int k = 0; k < 4 && b <= level(); ++k) {
-              const double l = (ux * (p.x(ss[k]) - cx_) + uy * (p.y(ts[k]) - cy_)) / n;  // u . (y - c), u the unit direction to the centre
-              b = l > 0 ? std::max(b, (v[k] - top_) / l) : kInf;
-            }
-            if (b <= level()) return;
-          }
           for (int k = 0; k < 4; ++k)
             if (fresh & (1u << k)) attain(p, ss[k], ts[k], v[k]);
           for (double t : {t0, t1}) edge_maximum(p, t, s0, s1, true);
