@@ -840,17 +840,18 @@ MaxTree max_tree(std::vector<float> top, const HalfGrid& grid, int width, int he
 }
 
 // No point of the rectangle r is seen descending from F: grad S(y) . (y - x) >= 0 for every
-// corner x of F, with the gradient anywhere in its box (interval products, so safe).
+// corner x of F, with the gradient anywhere in its box (interval products, so safe). Per
+// corner of F the two terms' minima are added; the smallest sum over F's corners is the sum
+// of the smaller term along each axis (rounding is monotone: the same verdict).
+// lowest_term: along one axis, the smallest g (y - x) for g in [g0, g1], y in [r0, r1], x in
+// [f0, f1]: bilinear in g and in the offset y - x, whose extremes are r0 - f1 and r1 - f0,
+// so the four products at the extremes bound the others (rounding monotone again).
+inline double lowest_term(double g0, double g1, double r0, double r1, double f0, double f1) {
+  const double d0 = r0 - f1, d1 = r1 - f0;
+  return std::min(std::min(g0 * d0, g0 * d1), std::min(g1 * d0, g1 * d1));
+}
 bool rises_away(const float* box, const Rect& r, const Rect& f) {
-  // Per corner of F the two terms' minima are added; the smallest sum over F's corners is
-  // the sum of the smaller term along each axis (rounding is monotone: the same verdict).
-  // Along an axis the term g (y - x) is bilinear in g and in the offset y - x, whose extremes
-  // over r's and F's corners are r0 - f1 and r1 - f0: the products at the extremes bound the
-  // other corners' (rounding monotone again), four products instead of eight.
-  auto low = [](double g0, double g1, double d0, double d1) { return std::min(std::min(g0 * d0, g0 * d1), std::min(g1 * d0, g1 * d1)); };
-  const double along_x = low(box[0], box[1], r.x0 - f.x1, r.x1 - f.x0);
-  const double along_y = low(box[2], box[3], r.y0 - f.y1, r.y1 - f.y0);
-  return !(along_x + along_y < 0);
+  return !(lowest_term(box[0], box[1], r.x0, r.x1, f.x0, f.x1) + lowest_term(box[2], box[3], r.y0, r.y1, f.y0, f.y1) < 0);
 }
 
 // Upper bound of S(y) - psi dist(y, F) - T over the rectangle r (disjoint from F's
@@ -1168,11 +1169,20 @@ class BlockSearch {
 
   // Relaxed cones: drop the texels that see no point of r descend. Once for the block first
   // (no point descends as seen from F_B: then from no F_p inside it either).
+  // Per texel the term along x depends on its column only, the one along y on its row: each
+  // is computed once (rises_away's verdict, bit for bit).
   Mask rising(const float* box, const Rect& r, const Block& b, Mask keep) const {
     if ((keep & (keep - 1)) != 0 && rises_away(box, r, b.f)) return 0;
+    std::array<double, kBlock> along_x, along_y;
+    unsigned have_x = 0, have_y = 0;
     for (Mask q = keep; q != 0; q &= q - 1) {
-      const size_t k = static_cast<size_t>(low_bit(q));
-      if (rises_away(box, r, footprint_[k])) keep &= ~(Mask{1} << k);
+      const int k = low_bit(q), c = k & (kBlock - 1), rr = k >> kBlockLog;
+      const size_t uc = static_cast<size_t>(c), ur = static_cast<size_t>(rr);
+      if (((have_x >> c) & 1) == 0) along_x[uc] = lowest_term(box[0], box[1], r.x0, r.x1, b.i0 + c, b.i0 + c + 1.0);
+      if (((have_y >> rr) & 1) == 0) along_y[ur] = lowest_term(box[2], box[3], r.y0, r.y1, b.j0 + rr, b.j0 + rr + 1.0);
+      have_x |= 1u << c;
+      have_y |= 1u << rr;
+      if (!(along_x[uc] + along_y[ur] < 0)) keep &= ~(Mask{1} << k);
     }
     return keep;
   }
