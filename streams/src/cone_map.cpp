@@ -1030,8 +1030,8 @@ inline Mask less_bits(Pair a, Pair b) {
 // block) and gy2 (per row) may hold a steeper point: m > T and not (m - T)^2 <= level^2 d^2,
 // the test of one texel at a time (the same IEEE operations, so the same verdicts) for two
 // at once, the masks from the compares. It is level2 d^2 < max(m - T, 0)^2: d^2 is 0 or at
-// least 1 (gaps are whole texels), level2 is finite, and a positive m - T is a difference of
-// floats, whose square does not underflow. Pairs without a texel of `keep` are skipped: a
+// least 1 (gaps are whole texels), level2 is finite (the caller clamps it below overflow),
+// and a positive m - T is a difference of floats, whose square does not underflow. Pairs without a texel of `keep` are skipped: a
 // child is tested for ~7 of the 16 texels on the bricks. With_apart: `apart` receives those
 // of the texels kept with d^2 >= size2.
 template <bool with_apart>
@@ -1092,7 +1092,7 @@ class BlockSearch {
         const int x = i + dx, y = j + dy;
         if (x < 0 || y < 0 || x >= w_ || y >= h_ || !(tree_.at(0, x, y) > top[uk]) || !(s[uk].psi < cap[uk])) continue;
         if (relaxed && rises_away(leaves_.box(x, y), Rect{static_cast<double>(x), static_cast<double>(y), x + 1.0, y + 1.0}, footprint_[uk])) continue;
-        if ((dx == 0 || dy == 0) && s[uk].side_texel_settles(grid_, x, y, 0, 0)) continue;
+        if ((dx == 0 || dy == 0) && s[uk].side_texel_settles(grid_, x, y, 0, 0)) continue;  // a side neighbour whole
         for (int bb = 2 * y; bb <= 2 * y + 1; ++bb)
           for (int a = 2 * x; a <= 2 * x + 1; ++a) s[uk].piece(piece(0, 0, a, bb));
       }
