@@ -8,7 +8,12 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 namespace meso {
 
@@ -39,14 +44,36 @@ struct HalfGrid {
   float at(int a, int b) const { return v[static_cast<size_t>(b) * static_cast<size_t>(gw) + static_cast<size_t>(a)]; }
 };
 
+// Grid point a along an axis is S at pixel a / 2: between texels (a - 1) div 2 and the next,
+// at fraction 0 (a odd, a texel centre) or 1/2 (a even, an edge), exactly as bilinear()
+// finds them from floor(a / 2 - 1/2).
+inline int grid_texel(int a) { return (a + 1) / 2 - 1; }  // a >= 0
+inline float grid_fraction(int a) { return (a & 1) != 0 ? 0.0f : 0.5f; }
+
 HalfGrid half_grid(const HeightField& f) {
+  const int w = f.height.width, h = f.height.height;
+  // The texels with a border of one, as the border rule reads them: S(a / 2, b / 2) is
+  // f.bilinear(a / 2, b / 2) bit for bit, without its floor and four addressed lookups
+  // per grid point (3 % of the build at 256²).
+  const int pw = w + 2;
+  std::vector<float> padded(static_cast<size_t>(pw) * static_cast<size_t>(h + 2));
+  for (int y = -1; y <= h; ++y)
+    for (int x = -1; x <= w; ++x) padded[static_cast<size_t>(y + 1) * static_cast<size_t>(pw) + static_cast<size_t>(x + 1)] = f.texel(x, y);
+  auto at = [&](int x, int y) { return padded[static_cast<size_t>(y + 1) * static_cast<size_t>(pw) + static_cast<size_t>(x + 1)]; };
   HalfGrid g;
-  g.gw = 2 * f.height.width + 1;
-  g.gh = 2 * f.height.height + 1;
+  g.gw = 2 * w + 1;
+  g.gh = 2 * h + 1;
   g.v.resize(static_cast<size_t>(g.gw) * static_cast<size_t>(g.gh));
   tbb::parallel_for(tbb::blocked_range<int>(0, g.gh), [&](const tbb::blocked_range<int>& rows) {
-    for (int b = rows.begin(); b < rows.end(); ++b)
-      for (int a = 0; a < g.gw; ++a) g.v[static_cast<size_t>(b) * static_cast<size_t>(g.gw) + static_cast<size_t>(a)] = f.bilinear(0.5 * a, 0.5 * b);
+    for (int b = rows.begin(); b < rows.end(); ++b) {
+      const int y = grid_texel(b);
+      const float ty = grid_fraction(b);
+      for (int a = 0; a < g.gw; ++a) {
+        const int x = grid_texel(a);
+        g.v[static_cast<size_t>(b) * static_cast<size_t>(g.gw) + static_cast<size_t>(a)] =
+            bilinear_blend(at(x, y), at(x + 1, y), at(x, y + 1), at(x + 1, y + 1), grid_fraction(a), ty);
+      }
+    }
   });
   return g;
 }
@@ -106,11 +133,20 @@ class ConeSearch {
     zx_ = p.x0 >= f_.x1 ? 1 : (px1 <= f_.x0 ? -1 : 0);
     zy_ = p.y0 >= f_.y1 ? 1 : (py1 <= f_.y0 ? -1 : 0);
     if (zx_ == 0 && zy_ == 0) return;  // inside F, where S <= T
-    if (zx_ != 0 && zy_ != 0) {
-      // Corner zone: the nearest point of F is its corner c; the piece touches c when one of
-      // its corners is c (local coordinates sc, tc).
+    const std::array<double, 4> v = {p.value(0, 0), p.value(1, 0), p.value(0, 1), p.value(1, 1)};
+    if (zx_ == 0 || zy_ == 0) {
+      // refine()'s first test, which ends most pieces, here without its call: the exact
+      // supremum over a side piece.
+      if (side_upper(p, 0, 0, 1, 1, v) <= level()) return;
+    } else {
+      // Corner zone: the nearest point of F is its corner c.
       cx_ = zx_ > 0 ? f_.x1 : f_.x0;
       cy_ = zy_ > 0 ? f_.y1 : f_.y0;
+      // refine()'s first test here too, before the corner's setup (a piece that touches c, at
+      // distance 0, goes on: it may hold the limit at c).
+      const double near = nearest(p, 0, 0, 1, 1);
+      if (near > 0 && std::max(std::max(v[0], v[1]), std::max(v[2], v[3])) - top_ <= level() * near) return;
+      // The piece touches c when one of its corners is c (local coordinates sc, tc).
       touches_ = (cx_ == p.x0 || cx_ == px1) && (cy_ == p.y0 || cy_ == py1);
       sc_ = 2 * (cx_ - p.x0);
       tc_ = 2 * (cy_ - p.y0);
@@ -126,7 +162,7 @@ class ConeSearch {
       boundary_max_ = !(p.value(sc_, tc_) < top_ && p.e * zx_ * zy_ < 0);
     }
     if (zx_ != 0 && zy_ != 0 && touches_ && p.value(sc_, tc_) >= top_) attain_corner_limit(p);
-    refine(p, 0, 0, 1, 1, {p.value(0, 0), p.value(1, 0), p.value(0, 1), p.value(1, 1)}, 0xf, 0);
+    refine(p, 0, 0, 1, 1, v, 0xf, 0);
   }
 
  private:
@@ -136,7 +172,8 @@ class ConeSearch {
     return length(dx, dy);
   }
   // The same for a point of the current piece, whose zone fixes the form: the gap along one
-  // axis beside F (no square root), the distance to the corner c off it.
+  // axis beside F (no square root), the distance to the corner c off it. The same values,
+  // bit for bit (a correctly rounded square root of a rounded square is the number).
   double piece_distance(double x, double y) const {
     if (zy_ == 0) return std::max(zx_ > 0 ? x - f_.x1 : f_.x0 - x, 0.0);
     if (zx_ == 0) return std::max(zy_ > 0 ? y - f_.y1 : f_.y0 - y, 0.0);
@@ -208,6 +245,35 @@ class ConeSearch {
     double x = 0, y = 0, v = 0, gx = 0, gy = 0;
     bool valid = false;
   } best;
+  // Texel (x, y) of the grid's map shifted by (ox, oy) pixels, in F's row or column but not
+  // F: the supremum of psi over every point of it, without its pieces. The gap to F is along
+  // one axis, so as in side_upper: along a column of the texel the gap is constant and S
+  // linear on each piece, along a row (S - T) / gap is monotone on each piece, and where the
+  // row leaves F's edge (gap 0, S <= T) it is at most its value half a texel on. So the
+  // largest (S - T) / gap over the 3 x 3 grid points at a positive gap is the supremum.
+  // Conservative cones attain it (the gradient of a seed is read by relaxed cones only): the
+  // texel is settled. For relaxed ones it bounds the supremum over the points seen
+  // descending: settled (dismissed) when no steeper than the level, else its pieces decide.
+  bool side_texel_settles(const HalfGrid& g, int x, int y, double ox, double oy) {
+    const double px = ox + x, py = oy + y;
+    const bool in_row = py == f_.y0;  // else in F's column: the gap is along y
+    double upper = relaxed_ ? 0.0 : psi;  // conservative cones raise psi itself
+    for (int r = 0; r <= 2; ++r)
+      for (int c = 0; c <= 2; ++c) {
+        const double v = g.at(2 * x + c, 2 * y + r);
+        if (v <= top_) continue;
+        const double qx = px + 0.5 * c, qy = py + 0.5 * r;
+        const double d = in_row ? std::max(qx - f_.x1, f_.x0 - qx) : std::max(qy - f_.y1, f_.y0 - qy);
+        if (!(d > 0) || !((v - top_) / d > upper)) continue;
+        upper = (v - top_) / d;
+        if (!relaxed_) {
+          psi = upper;
+          best = {qx, qy, v, 0, 0, true};
+        }
+      }
+    return !relaxed_ || upper <= level();
+  }
+
   void seed(const Point& q) {
     if (!q.valid) return;
     const double d = distance(q.x, q.y);
@@ -263,23 +329,24 @@ class ConeSearch {
     } else {
       // First the plain bound (max S - T) / (nearest distance): most pieces end here.
       if (vmax - top_ <= level() * nearest(p, s0, t0, s1, t1)) return;
+      // Then one bound over every point (the direction to the rectangle's centre, see
+      // corner_upper, which starts with it), cheaper than the descent tests and the eight
+      // evaluations below when it settles the rectangle.
+      if (!touches_) {
+        const double ux = p.x(s0) + p.x(s1) - 2 * cx_, uy = p.y(t0) + p.y(t1) - 2 * cy_;
+        const double n = length(ux, uy);
+        double b = 0;
+        for (int k = 0; k < 4 && b <= level(); ++k) {
+          const double l = (ux * (p.x(ss[k]) - cx_) + uy * (p.y(ts[k]) - cy_)) / n;  // u . (y - c), u the unit direction to the centre
+          b = l > 0 ? std::max(b, (v[k] - top_) / l) : kInf;
+        }
+        if (b <= level()) return;
+      }
       if (relaxed_ && never_descends(p, s0, t0, s1, t1)) return;
       if (boundary_max_) {
         // The supremum is on the boundary (of the rectangle, or for relaxed cones of its part
         // seen descending), where it is computed exactly.
         if (!relaxed_ || descends_throughout(p, s0, t0, s1, t1)) {
-          // One bound first (the direction to the rectangle's centre, see corner_upper),
-          // cheaper than the eight evaluations below when it settles the rectangle.
-          if (!touches_) {
-            const double ux = p.x(s0) + p.x(s1) - 2 * cx_, uy = p.y(t0) + p.y(t1) - 2 * cy_;
-            const double n = length(ux, uy);
-            double b = 0;
-            for (int k = 0; k < 4 && b <= level(); ++k) {
-              const double l = (ux * (p.x(ss[k]) - cx_) + uy * (p.y(ts[k]) - cy_)) / n;  // u . (y - c), u the unit direction to the centre
-              b = l > 0 ? std::max(b, (v[k] - top_) / l) : kInf;
-            }
-            if (b <= level()) return;
-          }
           for (int k = 0; k < 4; ++k)
             if (fresh & (1u << k)) attain(p, ss[k], ts[k], v[k]);
           for (double t : {t0, t1}) edge_maximum(p, t, s0, s1, true);
@@ -527,7 +594,9 @@ class ConeSearch {
       std::array<double, 4> e;
       int depth;
     };
-    std::array<Arc, 2 * kArcDepth + 2> stack{};
+    // Not value-initialised: entries are written before they are read, and zeroing the 50
+    // entries (2 kB per arc) cost 1.2 % of the instructions of relaxed bricks at 256².
+    std::array<Arc, 2 * kArcDepth + 2> stack;
     int top = 0;
     stack[static_cast<size_t>(top++)] = {whole, 0};
     while (top > 0) {
@@ -539,7 +608,7 @@ class ConeSearch {
       double upper, near;
       if (zx_ == 0 || zy_ == 0) {
         upper = side_upper(p, bs0, bt0, bs1, bt1, v);
-        near = std::min(distance(p.x(bs0), p.y(bt0)), distance(p.x(bs1), p.y(bt1)));  // dist is monotone across the box
+        near = std::min(piece_distance(p.x(bs0), p.y(bt0)), piece_distance(p.x(bs1), p.y(bt1)));  // dist is monotone across the box
       } else {
         const double vmax = std::max({v[0], v[1], v[2], v[3]});
         near = nearest(p, bs0, bt0, bs1, bt1);
@@ -571,7 +640,7 @@ class ConeSearch {
       // The half nearer F last, so searched first: bounds grow toward F, and once the
       // largest is kept the rest of the arc is dismissed against it.
       const Arc first{{a.e[0], a.e[1], sm, tm}, a.depth + 1}, second{{sm, tm, a.e[2], a.e[3]}, a.depth + 1};
-      const bool first_nearer = distance(p.x(a.e[0]), p.y(a.e[1])) < distance(p.x(a.e[2]), p.y(a.e[3]));
+      const bool first_nearer = piece_distance(p.x(a.e[0]), p.y(a.e[1])) < piece_distance(p.x(a.e[2]), p.y(a.e[3]));
       stack[static_cast<size_t>(top++)] = first_nearer ? second : first;
       stack[static_cast<size_t>(top++)] = first_nearer ? first : second;
     }
@@ -599,13 +668,25 @@ struct MaxTree {
   std::vector<std::vector<float>> level;
   std::vector<std::vector<float>> plane;  // per node a, gx, gy (level 0 unused)
   // Per node (levels >= 1) the box of S's gradients over it, gx in [0], [1], gy in [2], [3]:
-  // relaxed cones skip a node where the surface rises away from the whole footprint.
+  // relaxed cones skip a node where the surface rises away from the whole footprint. Empty
+  // for conservative cones, which never read it (4 floats a node, and the texels' boxes).
   std::vector<std::vector<float>> gradient;
   size_t index(int l, int x, int y) const {
     return static_cast<size_t>(y) * static_cast<size_t>(w[static_cast<size_t>(l)]) + static_cast<size_t>(x);
   }
   float at(int l, int x, int y) const { return level[static_cast<size_t>(l)][index(l, x, y)]; }
 };
+
+// The float next to a finite v, above it (up) or below: std::nextafter's value, without its
+// library call (1 % of the instructions of relaxed builds at 256²).
+float float_step(float v, bool up) {
+  if (v == 0) return up ? std::numeric_limits<float>::denorm_min() : -std::numeric_limits<float>::denorm_min();
+  uint32_t bits;
+  std::memcpy(&bits, &v, sizeof bits);
+  bits = (v > 0) == up ? bits + 1 : bits - 1;  // the magnitude grows when the step leads away from 0
+  std::memcpy(&v, &bits, sizeof v);
+  return v;
+}
 
 // The box of S's gradients over texel (i, j): on each of its four pieces dS/dx is affine in
 // y and dS/dy in x, so the pieces' corners give the extremes. Rounded outward.
@@ -623,16 +704,16 @@ void texel_gradients(const HalfGrid& grid, int i, int j, float* q) {
         hi_y = std::max(hi_y, gy);
       }
     }
-  q[0] = std::nextafter(static_cast<float>(lo_x), -std::numeric_limits<float>::infinity());
-  q[1] = std::nextafter(static_cast<float>(hi_x), std::numeric_limits<float>::infinity());
-  q[2] = std::nextafter(static_cast<float>(lo_y), -std::numeric_limits<float>::infinity());
-  q[3] = std::nextafter(static_cast<float>(hi_y), std::numeric_limits<float>::infinity());
+  q[0] = float_step(static_cast<float>(lo_x), false);
+  q[1] = float_step(static_cast<float>(hi_x), true);
+  q[2] = float_step(static_cast<float>(lo_y), false);
+  q[3] = float_step(static_cast<float>(hi_y), true);
 }
 
 // A float not below v.
 float up(double v) {
   float f = static_cast<float>(v);
-  if (static_cast<double>(f) < v) f = std::nextafter(f, std::numeric_limits<float>::infinity());
+  if (static_cast<double>(f) < v) f = float_step(f, true);
   return f;
 }
 
@@ -654,7 +735,7 @@ void texel_plane(const HalfGrid& grid, int i, int j, float* q) {
   q[2] = fy;
 }
 
-MaxTree max_tree(std::vector<float> top, const HalfGrid& grid, int width, int height) {
+MaxTree max_tree(std::vector<float> top, const HalfGrid& grid, int width, int height, bool boxes) {
   MaxTree t;
   t.w.push_back(width);
   t.h.push_back(height);
@@ -669,7 +750,7 @@ MaxTree max_tree(std::vector<float> top, const HalfGrid& grid, int width, int he
     const double fs = std::ldexp(1.0, l), cs = 2 * fs;  // node sizes in texels
     std::vector<float> c(static_cast<size_t>(cw) * static_cast<size_t>(ch));
     std::vector<float> cp(c.size() * 3);
-    std::vector<float> cg(c.size() * 4);
+    std::vector<float> cg(boxes ? c.size() * 4 : 0);
     const std::vector<float>& fine = t.level.back();
     const std::vector<float>& fine_plane = t.plane.back();
     const std::vector<float>& fine_gradient = t.gradient.back();
@@ -696,10 +777,10 @@ MaxTree max_tree(std::vector<float> top, const HalfGrid& grid, int width, int he
               k.m = fine[n];
               if (l == 0) {
                 texel_plane(grid, xx, yy, k.plane);
-                texel_gradients(grid, xx, yy, k.box);
+                if (boxes) texel_gradients(grid, xx, yy, k.box);
               } else {
                 std::copy_n(&fine_plane[n * 3], 3, k.plane);
-                std::copy_n(&fine_gradient[n * 4], 4, k.box);
+                if (boxes) std::copy_n(&fine_gradient[n * 4], 4, k.box);
               }
               rect_of(fs, xx, yy, k.x0, k.y0, k.x1, k.y1);
             }
@@ -736,6 +817,7 @@ MaxTree max_tree(std::vector<float> top, const HalfGrid& grid, int width, int he
           cp[n * 3] = up(a);
           cp[n * 3 + 1] = fx;
           cp[n * 3 + 2] = fy;
+          if (!boxes) continue;
           float* box = &cg[n * 4];
           box[0] = box[2] = std::numeric_limits<float>::infinity();
           box[1] = box[3] = -std::numeric_limits<float>::infinity();
@@ -758,14 +840,18 @@ MaxTree max_tree(std::vector<float> top, const HalfGrid& grid, int width, int he
 }
 
 // No point of the rectangle r is seen descending from F: grad S(y) . (y - x) >= 0 for every
-// corner x of F, with the gradient anywhere in its box (interval products, so safe).
+// corner x of F, with the gradient anywhere in its box (interval products, so safe). Per
+// corner of F the two terms' minima are added; the smallest sum over F's corners is the sum
+// of the smaller term along each axis (rounding is monotone: the same verdict).
+// lowest_term: along one axis, the smallest g (y - x) for g in [g0, g1], y in [r0, r1], x in
+// [f0, f1]: bilinear in g and in the offset y - x, whose extremes are r0 - f1 and r1 - f0,
+// so the four products at the extremes bound the others (rounding monotone again).
+inline double lowest_term(double g0, double g1, double r0, double r1, double f0, double f1) {
+  const double d0 = r0 - f1, d1 = r1 - f0;
+  return std::min(std::min(g0 * d0, g0 * d1), std::min(g1 * d0, g1 * d1));
+}
 bool rises_away(const float* box, const Rect& r, const Rect& f) {
-  // Per corner of F the two terms' minima are added; the smallest sum over F's corners is
-  // the sum of the smaller term along each axis (rounding is monotone: the same verdict).
-  auto low = [](double g0, double g1, double d0, double d1) { return std::min({g0 * d0, g0 * d1, g1 * d0, g1 * d1}); };
-  const double along_x = std::min(low(box[0], box[1], r.x0 - f.x0, r.x1 - f.x0), low(box[0], box[1], r.x0 - f.x1, r.x1 - f.x1));
-  const double along_y = std::min(low(box[2], box[3], r.y0 - f.y0, r.y1 - f.y0), low(box[2], box[3], r.y0 - f.y1, r.y1 - f.y1));
-  return !(along_x + along_y < 0);
+  return !(lowest_term(box[0], box[1], r.x0, r.x1, f.x0, f.x1) + lowest_term(box[2], box[3], r.y0, r.y1, f.y0, f.y1) < 0);
 }
 
 // Upper bound of S(y) - psi dist(y, F) - T over the rectangle r (disjoint from F's
@@ -900,6 +986,70 @@ constexpr Mask kColumn = [] {
   return m;
 }();
 constexpr Mask kRow = (Mask{1} << kBlock) - 1;
+// Per column (or row) of a block, a squared gap.
+using Gaps = std::array<double, kBlock>;
+// The squared gaps from the block's columns (rows) [t0 + c, t0 + c + 1] to [a0, a1]:
+// gap() = max(t0 + c - a1, a0 - t0 - c - 1, 0), the same values (all are whole numbers,
+// exact in double) from two differences.
+inline Gaps squared_gaps(int t0, double a0, double a1) {
+  const double after = t0 - a1, before = a0 - t0 - 1.0;
+  Gaps g;
+  for (size_t c = 0; c < kBlock; ++c) {
+    const double gp = std::max(std::max(after + static_cast<double>(c), before - static_cast<double>(c)), 0.0);
+    g[c] = gp * gp;
+  }
+  return g;
+}
+
+// The block's texels two at a time, texels k and k + 1 (k even: half a row), in one SSE2
+// register on x86-64 (a GCC/Clang vector extension: plain scalar code elsewhere).
+typedef double Pair __attribute__((vector_size(16)));
+static_assert(kBlock % 2 == 0, "pairs of texels within a row");
+inline Pair load_pair(const double* p) {
+  Pair v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+inline Pair positive_part(Pair a) {
+#if defined(__SSE2__)
+  return _mm_max_pd(a, _mm_setzero_pd());
+#else
+  return a > Pair{0.0, 0.0} ? a : Pair{0.0, 0.0};
+#endif
+}
+// a < b per texel: bit 0 the pair's first texel, bit 1 its second.
+inline Mask less_bits(Pair a, Pair b) {
+#if defined(__SSE2__)
+  return static_cast<Mask>(_mm_movemask_pd(_mm_cmplt_pd(a, b)));
+#else
+  return static_cast<Mask>((a[0] < b[0] ? 1 : 0) | (a[1] < b[1] ? 2 : 0));
+#endif
+}
+
+// The texels of `keep` for which a node of maximum m at squared gaps gx2 (per column of the
+// block) and gy2 (per row) may hold a steeper point: m > T and not (m - T)^2 <= level^2 d^2,
+// the test of one texel at a time (the same IEEE operations, so the same verdicts) for two
+// at once, the masks from the compares. It is level2 d^2 < max(m - T, 0)^2: d^2 is 0 or at
+// least 1 (gaps are whole texels), level2 is finite (the caller clamps it below overflow),
+// and a positive m - T is a difference of floats, whose square does not underflow. Pairs without a texel of `keep` are skipped: a
+// child is tested for ~7 of the 16 texels on the bricks. With_apart: `apart` receives those
+// of the texels kept with d^2 >= size2.
+template <bool with_apart>
+Mask steeper(double m, const Gaps& gx2, const Gaps& gy2, const std::array<double, kBlock * kBlock>& top,
+             const std::array<double, kBlock * kBlock>& level2, Mask keep, double size2, Mask& apart) {
+  Mask out = 0;
+  for (Mask pairs = (keep | keep >> 1) & 0x55555555u; pairs != 0; pairs &= pairs - 1) {
+    const size_t k = static_cast<size_t>(low_bit(pairs));
+    const Pair e = positive_part(m - load_pair(&top[k]));
+    const Pair d2 = load_pair(&gx2[k & (kBlock - 1)]) + gy2[k >> kBlockLog];
+    const Mask kept = less_bits(load_pair(&level2[k]) * d2, e * e);
+    out |= kept << k;
+    if constexpr (with_apart) apart |= (kept & ~less_bits(d2, Pair{size2, size2})) << k;
+  }
+  if constexpr (with_apart) apart &= keep;
+  return out & keep;
+}
+
 // A texel's 8 neighbours, the sides first.
 constexpr std::array<std::pair<int, int>, 8> kNeighbours = {{{-1, 0}, {1, 0}, {0, -1}, {0, 1}, {-1, -1}, {1, -1}, {-1, 1}, {1, 1}}};
 
@@ -942,6 +1092,7 @@ class BlockSearch {
         const int x = i + dx, y = j + dy;
         if (x < 0 || y < 0 || x >= w_ || y >= h_ || !(tree_.at(0, x, y) > top[uk]) || !(s[uk].psi < cap[uk])) continue;
         if (relaxed && rises_away(leaves_.box(x, y), Rect{static_cast<double>(x), static_cast<double>(y), x + 1.0, y + 1.0}, footprint_[uk])) continue;
+        if ((dx == 0 || dy == 0) && s[uk].side_texel_settles(grid_, x, y, 0, 0)) continue;  // a side neighbour whole
         for (int bb = 2 * y; bb <= 2 * y + 1; ++bb)
           for (int a = 2 * x; a <= 2 * x + 1; ++a) s[uk].piece(piece(0, 0, a, bb));
       }
@@ -976,15 +1127,27 @@ class BlockSearch {
     float m;    // the node's maximum
     Mask mask;  // the block's texels for which it may hold a steeper point
     double d;   // distance to the block's footprint
+    // The squared gaps from the block's columns and rows to the node, computed once by the
+    // parent (which needs them to test it) for the test when it is popped.
+    Gaps gx2, gy2;
   };
 
   // Under the cone of the slope found: nothing to gain. Under the cone of that slope
   // widened by the tolerance: the node is dismissed and the widened slope kept as the
   // bound (the stored cone may be that much narrower, never wider).
   bool under(ConeSearch& s, const float* plane, const Rect& r, const Rect& f, double t) const {
-    if (plane_excess(plane, r, f, t, s.level()) <= 0) return true;
+    const double level = s.level(), excess = plane_excess(plane, r, f, t, level);
+    if (excess <= 0) return true;
     const double widened = s.psi * (1 + tol_);
-    if (widened > s.bound && plane_excess(plane, r, f, t, widened) <= 0) {
+    if (!(widened > s.bound)) return false;
+    // plane_excess returned a value of h at some point y of r, and the widened cone lowers h
+    // there by (widened - level) dist(y, F), dist at most the sum of r's largest gaps along
+    // x and y: above that, the widened test cannot dismiss the node either. (It was tried
+    // on 328,209 nodes of the bricks at 256² and dismissed 119, at ~70 instructions each.)
+    const double far = std::max(gap(f.x0, f.x1, r.x0, r.x0), gap(f.x0, f.x1, r.x1, r.x1)) +
+                       std::max(gap(f.y0, f.y1, r.y0, r.y0), gap(f.y0, f.y1, r.y1, r.y1));
+    if (excess > (widened - level) * far) return false;
+    if (plane_excess(plane, r, f, t, widened) <= 0) {
       s.bound = std::max(s.bound, widened);
       return true;
     }
@@ -1006,11 +1169,20 @@ class BlockSearch {
 
   // Relaxed cones: drop the texels that see no point of r descend. Once for the block first
   // (no point descends as seen from F_B: then from no F_p inside it either).
+  // Per texel the term along x depends on its column only, the one along y on its row: each
+  // is computed once (rises_away's verdict, bit for bit).
   Mask rising(const float* box, const Rect& r, const Block& b, Mask keep) const {
     if ((keep & (keep - 1)) != 0 && rises_away(box, r, b.f)) return 0;
+    std::array<double, kBlock> along_x, along_y;
+    unsigned have_x = 0, have_y = 0;
     for (Mask q = keep; q != 0; q &= q - 1) {
-      const size_t k = static_cast<size_t>(low_bit(q));
-      if (rises_away(box, r, footprint_[k])) keep &= ~(Mask{1} << k);
+      const int k = low_bit(q), c = k & (kBlock - 1), rr = k >> kBlockLog;
+      const size_t uc = static_cast<size_t>(c), ur = static_cast<size_t>(rr);
+      if (((have_x >> c) & 1) == 0) along_x[uc] = lowest_term(box[0], box[1], r.x0, r.x1, b.i0 + c, b.i0 + c + 1.0);
+      if (((have_y >> rr) & 1) == 0) along_y[ur] = lowest_term(box[2], box[3], r.y0, r.y1, b.j0 + rr, b.j0 + rr + 1.0);
+      have_x |= 1u << c;
+      have_y |= 1u << rr;
+      if (!(along_x[uc] + along_y[ur] < 0)) keep &= ~(Mask{1} << k);
     }
     return keep;
   }
@@ -1019,49 +1191,34 @@ class BlockSearch {
   // block) first.
   void visit(const Block& b, const PerTexel& top, const PerTexel& cap, std::vector<ConeSearch>& s, double ox, double oy, Mask mask0) {
     stack_.clear();
-    stack_.push_back({root_, 0, 0, static_cast<float>(global_max_), mask0, rect_distance(Rect{ox, oy, ox + w_, oy + h_}, b.f)});
-    std::array<double, kBlock> gx2{}, gy2{};
-    PerTexel level{}, level2{};
+    stack_.push_back({root_, 0, 0, static_cast<float>(global_max_), mask0, rect_distance(Rect{ox, oy, ox + w_, oy + h_}, b.f),
+                      squared_gaps(b.i0, ox, ox + w_), squared_gaps(b.j0, oy, oy + h_)});
+    PerTexel level2{};
     while (!stack_.empty() && live_ != 0) {
       const Node n = stack_.back();
       stack_.pop_back();
-      Mask keep = 0, apart = 0;
       const double m = n.m;
       const int size = 1 << n.level;
       const Rect r{ox + static_cast<double>(n.x) * size, oy + static_cast<double>(n.y) * size,
                    ox + std::min(static_cast<double>(n.x + 1) * size, static_cast<double>(w_)),
                    oy + std::min(static_cast<double>(n.y + 1) * size, static_cast<double>(h_))};
       const double size2 = static_cast<double>(size) * size;
-      // Squared gaps from each column and row of the block's texels to the node.
-      for (int c = 0; c < b.bw; ++c) {
-        const double gp = gap(b.i0 + c, b.i0 + c + 1.0, r.x0, r.x1);
-        gx2[static_cast<size_t>(c)] = gp * gp;
-      }
-      for (int c = 0; c < b.bh; ++c) {
-        const double gp = gap(b.j0 + c, b.j0 + c + 1.0, r.y0, r.y1);
-        gy2[static_cast<size_t>(c)] = gp * gp;
-      }
       // A node no higher than the apex, or whose maximum over its nearest distance is no
       // steeper than the slope already found (the value returned, level()), cannot change
       // that texel's answer: (m - T) <= level d, squared (both sides >= 0).
-      for (Mask q = n.mask & live_; q != 0; q &= q - 1) {
-        const int k = low_bit(q);
-        const size_t uk = static_cast<size_t>(k);
-        const double e = m - top[uk];
-        if (e <= 0) continue;
-        const double d2 = gx2[static_cast<size_t>(k & (kBlock - 1))] + gy2[static_cast<size_t>(k >> kBlockLog)];
-        level[uk] = s[uk].level();
-        level2[uk] = level[uk] * level[uk];
-        if (d2 > 0) {
-          if (e * e <= level2[uk] * d2) continue;
-          // The plane test only for nodes no larger than their distance: closer, the cone's
-          // distance term bends across the node and the test almost never dismisses it
-          // (measured on the bricks at 256²: 3 % of the tests at 8 texels, none above; a test
-          // costs ~300 instructions). Only a prune is skipped, never a point counted.
-          if (size2 <= d2) apart |= Mask{1} << k;
-        }
-        keep |= Mask{1} << k;
+      const Mask live = n.mask & live_;
+      for (Mask q = live; q != 0; q &= q - 1) {
+        const size_t k = static_cast<size_t>(low_bit(q));
+        const double level = s[k].level();
+        // Below overflow (see steeper()); an infinite square is tested the same.
+        level2[k] = std::min(level * level, std::numeric_limits<double>::max());
       }
+      // The plane test (`apart`) only for nodes no larger than their distance: closer, the
+      // cone's distance term bends across the node and the test almost never dismisses it
+      // (measured on the bricks at 256²: 3 % of the tests at 8 texels, none above; a test
+      // costs ~300 instructions). Only a prune is skipped, never a point counted.
+      Mask apart = 0;
+      Mask keep = steeper<true>(m, n.gx2, n.gy2, top, level2, live, size2, apart);
       if (keep == 0) continue;
       if (n.level > 0) {
         const size_t index = tree_.index(n.level, n.x, n.y);
@@ -1079,6 +1236,14 @@ class BlockSearch {
           apart &= keep;
           if (keep == 0) continue;
         }
+        // A leaf in a texel's row or column is taken whole first (side_texel_settles):
+        // conservative cones then need no plane test, which costs more.
+        Mask whole = 0;
+        for (Mask q = keep; q != 0; q &= q - 1) {
+          const size_t k = static_cast<size_t>(low_bit(q));
+          if (r.x0 == footprint_[k].x0 || r.y0 == footprint_[k].y0) whole |= Mask{1} << k;
+        }
+        if (!relaxed_) apart &= ~whole;
         if (apart != 0) keep = planes(leaves_.plane(n.x, n.y), r, top, s, keep, apart);
         if (keep != 0 && relaxed_) keep = rising(leaves_.box(n.x, n.y), r, b, keep);
         if (keep == 0) continue;
@@ -1086,7 +1251,8 @@ class BlockSearch {
                                        piece(ox, oy, 2 * n.x + 1, 2 * n.y + 1)};
         for (Mask q = keep; q != 0; q &= q - 1) {
           const size_t k = static_cast<size_t>(low_bit(q));
-          for (const Piece& p : pieces) s[k].piece(p);
+          if (!((whole >> k) & 1) || !s[k].side_texel_settles(grid_, n.x, n.y, ox, oy))
+            for (const Piece& p : pieces) s[k].piece(p);
           if (!(s[k].psi < cap[k])) live_ &= ~(Mask{1} << k);
         }
         continue;
@@ -1099,46 +1265,38 @@ class BlockSearch {
       const int cs = 1 << l, kw = tree_.w[static_cast<size_t>(l)], kh = tree_.h[static_cast<size_t>(l)];
       const float* kid_max = tree_.level[static_cast<size_t>(l)].data();
       const int cx0 = 2 * n.x, cx1 = std::min(2 * n.x + 1, kw - 1), cy0 = 2 * n.y, cy1 = std::min(2 * n.y + 1, kh - 1);
-      std::array<std::array<double, kBlock>, 2> kgx2{}, kgy2{};
-      std::array<double, 2> bgx{}, bgy{};  // gaps to the block's footprint
+      std::array<Gaps, 2> kgx2, kgy2;
+      std::array<double, 2> bgx, bgy;  // gaps to the block's footprint
       // Along one axis: the squared gaps from each of the block's texel columns (rows) to
       // the children's cells k0..k1 (origin o, cells cs wide, clipped at `extent`), and the
       // gap from the block's footprint [f0, f1].
-      auto axis_gaps = [&](int k0, int k1, double o, double extent, int t0, int texels, double f0, double f1,
-                           std::array<std::array<double, kBlock>, 2>& g2, std::array<double, 2>& bg) {
+      auto axis_gaps = [&](int k0, int k1, double o, double extent, int t0, double f0, double f1, std::array<Gaps, 2>& g2,
+                           std::array<double, 2>& bg) {
         for (int k = k0; k <= k1; ++k) {
           const double a0 = o + static_cast<double>(k) * cs, a1 = o + std::min(static_cast<double>(k + 1) * cs, extent);
           const size_t u = static_cast<size_t>(k - k0);
-          for (int c = 0; c < texels; ++c) {
-            const double gp = gap(t0 + c, t0 + c + 1.0, a0, a1);
-            g2[u][static_cast<size_t>(c)] = gp * gp;
-          }
+          g2[u] = squared_gaps(t0, a0, a1);
           bg[u] = gap(f0, f1, a0, a1);
         }
       };
-      axis_gaps(cx0, cx1, ox, static_cast<double>(w_), b.i0, b.bw, b.f.x0, b.f.x1, kgx2, bgx);
-      axis_gaps(cy0, cy1, oy, static_cast<double>(h_), b.j0, b.bh, b.f.y0, b.f.y1, kgy2, bgy);
+      axis_gaps(cx0, cx1, ox, static_cast<double>(w_), b.i0, b.f.x0, b.f.x1, kgx2, bgx);
+      axis_gaps(cy0, cy1, oy, static_cast<double>(h_), b.j0, b.f.y0, b.f.y1, kgy2, bgy);
       for (int cy = cy0; cy <= cy1; ++cy)
         for (int cx = cx0; cx <= cx1; ++cx) {
           const float km = kid_max[static_cast<size_t>(cy) * static_cast<size_t>(kw) + static_cast<size_t>(cx)];
-          const auto& ggx = kgx2[static_cast<size_t>(cx - cx0)];
-          const auto& ggy = kgy2[static_cast<size_t>(cy - cy0)];
-          Mask kid = 0;
-          for (Mask q = keep; q != 0; q &= q - 1) {
-            const int k = low_bit(q);
-            const double e = km - top[static_cast<size_t>(k)];
-            if (e <= 0) continue;
-            const double d2 = ggx[static_cast<size_t>(k & (kBlock - 1))] + ggy[static_cast<size_t>(k >> kBlockLog)];
-            if (d2 > 0 && e * e <= level2[static_cast<size_t>(k)] * d2) continue;
-            kid |= Mask{1} << k;
+          Mask unused = 0;
+          const Mask kid = steeper<false>(km, kgx2[static_cast<size_t>(cx - cx0)], kgy2[static_cast<size_t>(cy - cy0)], top, level2, keep, kInf, unused);
+          if (kid != 0) {
+            const size_t ux = static_cast<size_t>(cx - cx0), uy = static_cast<size_t>(cy - cy0);
+            kids[static_cast<size_t>(count++)] = Node{l, cx, cy, km, kid, length(bgx[ux], bgy[uy]), kgx2[ux], kgy2[uy]};
           }
-          if (kid != 0) kids[static_cast<size_t>(count++)] = Node{l, cx, cy, km, kid, length(bgx[static_cast<size_t>(cx - cx0)], bgy[static_cast<size_t>(cy - cy0)])};
         }
-      // Farthest pushed first, so the nearest is searched first (insertion sort of <= 4).
-      for (int a = 1; a < count; ++a)
-        for (int c = a; c > 0 && kids[static_cast<size_t>(c - 1)].d < kids[static_cast<size_t>(c)].d; --c)
-          std::swap(kids[static_cast<size_t>(c - 1)], kids[static_cast<size_t>(c)]);
-      for (int k = 0; k < count; ++k) stack_.push_back(kids[static_cast<size_t>(k)]);
+      // Farthest pushed first, so the nearest is searched first (insertion sort of <= 4, of
+      // indices: a node is 96 bytes).
+      std::array<size_t, 4> order = {0, 1, 2, 3};
+      for (size_t a = 1; a < static_cast<size_t>(count); ++a)
+        for (size_t c = a; c > 0 && kids[order[c - 1]].d < kids[order[c]].d; --c) std::swap(order[c - 1], order[c]);
+      for (size_t k = 0; k < static_cast<size_t>(count); ++k) stack_.push_back(kids[order[k]]);
     }
   }
 
@@ -1185,9 +1343,9 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
         for (int a = 2 * i; a <= 2 * i + 2; ++a) m = std::max(m, g.at(a, b));
       texel_top[static_cast<size_t>(j) * static_cast<size_t>(w) + static_cast<size_t>(i)] = m;
     }
-  const MaxTree tree = max_tree(std::move(texel_top), g, w, h);
-  const std::vector<float>& apex = tree.level[0];
   const bool relaxed = o.kind == ConeKind::relaxed;
+  const MaxTree tree = max_tree(std::move(texel_top), g, w, h, relaxed);
+  const std::vector<float>& apex = tree.level[0];
 
   Image out(w, h, 3);
   const int blocks_x = (w + kBlock - 1) / kBlock, blocks_y = (h + kBlock - 1) / kBlock;

@@ -24,7 +24,7 @@ float HeightField::bilinear(double px, double py) const {
   const float tx = static_cast<float>(fx - x0), ty = static_cast<float>(fy - y0);
   const int ix = static_cast<int>(x0), iy = static_cast<int>(y0);
   const float a = texel(ix, iy), b = texel(ix + 1, iy), c = texel(ix, iy + 1), d = texel(ix + 1, iy + 1);
-  return (a * (1 - tx) + b * tx) * (1 - ty) + (c * (1 - tx) + d * tx) * ty;
+  return bilinear_blend(a, b, c, d, tx, ty);
 }
 
 ImageMetadata height_field_metadata(const HeightField& field) {

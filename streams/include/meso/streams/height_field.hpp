@@ -29,6 +29,12 @@ struct HeightField {
   float bilinear(double px, double py) const;
 };
 
+// GL_LINEAR's blend of texels a (x0, y0), b (x0 + 1, y0), c (x0, y0 + 1), d (x0 + 1, y0 + 1)
+// at fractions (tx, ty), in float as HeightField::bilinear computes it.
+inline float bilinear_blend(float a, float b, float c, float d, float tx, float ty) {
+  return (a * (1 - tx) + b * tx) * (1 - ty) + (c * (1 - tx) + d * tx) * ty;
+}
+
 // Takes channel 0 of `image` (a baked displacement.exr in object units, or any grey height
 // map) and normalises it: bias = its minimum, scale = max - min (0 for a flat map, whose
 // normalised heights are all 0).
