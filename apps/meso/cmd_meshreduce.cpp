@@ -141,8 +141,9 @@ void add_meshreduce(CLI::App& app, Context& ctx) {
   auto* quality = sub->add_option("--quality", args->quality,
                                   "Speed against error: fast (lazy heap keys: queued edges are re-evaluated only when "
                                   "popped; fewer evaluations, not strictly cheapest-first: errors about those of balanced), balanced (every edge around a collapse "
-                                  "re-evaluated at once), best (balanced with area-weighted and with uniform face quadrics, keeping the output with the lower "
-                                  "measured Hausdorff distance: two reductions and two measurements); every preset keeps every guarantee")
+                                  "re-evaluated at once), best (balanced with area-weighted and with uniform face quadrics, each also with its free vertices "
+                                  "fitted to the input, keeping the nearest of the four by measured Hausdorff distance: two reductions, two fits and four "
+                                  "measurements); every preset keeps every guarantee")
                       ->check(CLI::IsMember({"fast", "balanced", "best"}))
                       ->capture_default_str();
   from->excludes(quality);
