@@ -233,6 +233,8 @@ void add_meshreduce(CLI::App& app, Context& ctx) {
       const bool record = !args->progressive.empty();
       if (record && o.quality == ReduceQuality::best)
         warn(ctx.globals, "--progressive: --quality best skips its surface fit, so that the record's last level is the output");
+      else if (o.quality == ReduceQuality::best && o.max_normal_deviation < 180.0f)
+        warn(ctx.globals, "--max-normal-deviation: --quality best skips its surface fit, which does not check that bound");
       const Mesh out = reduce_mesh(input, o, &r, progress, record ? &pm : nullptr);
       const bool locked = o.lock_boundary || !o.lock_groups.empty();
       if (!r.target_reached)

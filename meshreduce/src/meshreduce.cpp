@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <limits>
 #include <memory>
 #include <stdexcept>
 
@@ -210,7 +211,10 @@ Mesh reduce_mesh(const Mesh& input, const ReduceOptions& options, ReduceReport* 
   Mesh fitted[2];
   auto candidate = [&](int k) {
     distance[k] = reference->measure(outputs[k]);
-    if (!fit) return;
+    if (!fit || reports[k].collapses == 0) {  // nothing reduced (a target at or above the input): nothing to fit
+      fit_distance[k].hausdorff = std::numeric_limits<double>::infinity();
+      return;
+    }
     fitted[k] = outputs[k];
     reduce::SurfaceFitOptions fo;
     fo.max_aspect_ratio = options.max_aspect_ratio;
@@ -228,7 +232,10 @@ Mesh reduce_mesh(const Mesh& input, const ReduceOptions& options, ReduceReport* 
   if (fit) rep.fitted_hausdorff = {fit_distance[0].hausdorff, fit_distance[1].hausdorff};
   rep.fitted = use_fit;
   rep.distance = use_fit ? fit_distance[pick] : distance[pick];
-  if (use_fit) outputs[pick] = std::move(fitted[pick]);
+  if (use_fit) {
+    outputs[pick] = std::move(fitted[pick]);
+    rep.tracked_error = -1;
+  }
   rep.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (report) *report = rep;
   if (progressive) *progressive = std::move(records[pick]);

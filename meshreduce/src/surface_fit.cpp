@@ -10,7 +10,9 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <memory>
+#include <stdexcept>
 
 namespace meso::reduce {
 
@@ -18,7 +20,7 @@ namespace {
 
 Vec3d position(const Mesh& mesh, VertexHandle v) { return point(mesh.point(v)); }
 
-// A face's corners (face_halfedges order) and its unnormalised normal.
+// A face's corners (face_halfedges order).
 struct FaceCorners {
   std::array<int, 3> v;
 };
@@ -116,6 +118,7 @@ SurfaceFitReport fit_to_surface(Mesh& mesh, const SurfaceFitTarget& target, cons
   SurfaceFitReport rep;
   const SurfaceFitTarget::Impl& in = target.impl();
   const size_t nv = mesh.n_vertices();
+  if (fixed.size() != nv) throw std::invalid_argument("fit_to_surface: one fixed flag per vertex");
   // Unknowns: the free vertices, numbered in vertex order.
   std::vector<int> unknown(nv, -1);
   int n_free = 0;
@@ -154,7 +157,7 @@ SurfaceFitReport fit_to_surface(Mesh& mesh, const SurfaceFitTarget& target, cons
   static constexpr double kBackward[kBackwardPoints][3] = {{1, 0, 0},     {0, 1, 0},     {0, 0, 1},          {0.5, 0.5, 0},
                                                            {0, 0.5, 0.5}, {0.5, 0, 0.5}, {1.0 / 3, 1.0 / 3, 1.0 / 3}};
   // Forward rows: every stride-th input sample, weighted by the stride, about max_samples.
-  const size_t stride = std::max<size_t>(1, (in.points.size() + options.max_samples - 1) / std::max<size_t>(1, options.max_samples));
+  const size_t stride = options.max_samples == 0 ? 1 : std::max<size_t>(1, (in.points.size() + options.max_samples - 1) / options.max_samples);
   const size_t n_forward = (in.points.size() + stride - 1) / stride;
   std::vector<Row> rows(n_forward + kBackwardPoints * faces.size());
   struct FaceBlock {
@@ -335,7 +338,9 @@ SurfaceFitReport fit_to_surface(Mesh& mesh, const SurfaceFitTarget& target, cons
     auto faces_input = [&](bool moved, size_t f) {
       const std::vector<Vec3d>& at = moved ? next : pos;
       const FaceCorners& fc = faces[f];
-      const Vec3d centroid = (at[static_cast<size_t>(fc.v[0])] + at[static_cast<size_t>(fc.v[1])] + at[static_cast<size_t>(fc.v[2])]) / 3.0;
+      // (As the centroid's row computes it, so that `before` is its answer exactly.)
+      const Vec3d centroid = at[static_cast<size_t>(fc.v[0])] * kBackward[kCentroid][0] + at[static_cast<size_t>(fc.v[1])] * kBackward[kCentroid][1] +
+                             at[static_cast<size_t>(fc.v[2])] * kBackward[kCentroid][2];
       const int64_t before = rows[n_forward + kBackwardPoints * f + kCentroid].near;
       const int64_t id = !moved && before >= 0 ? before : in.tree->nearest(centroid, before).second;
       if (id < 0) return true;

@@ -8,7 +8,8 @@
 //     E(V) = sum_i w_i |x_i - sum_k b_ik v_k|^2 + lambda sum_j |v_j - v_j'|^2
 // solve a sparse linear least-squares problem, three right-hand sides (x, y, z), one normal
 // matrix; then the samples are attached anew and the solve repeats (their alternation,
-// which never increases E). The second term is a weak pull toward the current positions
+// which never increases E for fixed weights; here the weights change between solves and
+// refused moves are undone, so the best iterate is kept instead of the last). The second term is a weak pull toward the current positions
 // v_j' (in place of their spring energy), so that a vertex whose faces attract no sample
 // stays where it is and the system is positive definite. Quadric placement puts a collapsed
 // vertex where the removed faces' planes meet, off the surface on curved parts (outside on
@@ -27,10 +28,10 @@
 
 namespace meso::reduce {
 
-// The surface to fit to: points on it with weights (the area each stands for, object
-// units^2): its vertices (a third of their faces' area each) and its face centroids (a third
-// of the face's area each), two per face on a regular mesh, enough for an output with far
-// fewer faces; and its triangles, for the distance the other way.
+// The surface to fit to: points on it with weights (object units^2): its vertices (a third
+// of their faces' area each) and its face centroids (a third of the face's area each; the
+// weights sum to 4/3 of the area), about one and a half per face on a regular mesh, enough
+// for an output with far fewer faces; and its triangles, for the distance the other way.
 class SurfaceFitTarget {
  public:
   explicit SurfaceFitTarget(const Mesh& input);
@@ -52,8 +53,8 @@ struct SurfaceFitOptions {
   // the L_power norm, which leans toward the largest distances (the Hausdorff distance is
   // the L_infinity one).
   double power = 5.0;
-  // Input samples used: about this many (every k-th, weighted by k; all when fewer), each
-  // costing a closest-point query per iteration.
+  // Input samples used: about this many (every k-th, weighted by k; all when fewer, or
+  // when 0), each costing a closest-point query per iteration.
   size_t max_samples = 50000;
   // As ReduceOptions::max_aspect_ratio: a move may not make a face a needle beyond this
   // (unless it already was one). 0: off.
@@ -63,11 +64,14 @@ struct SurfaceFitOptions {
 struct SurfaceFitReport {
   int iterations = 0;     // solves made
   size_t free_vertices = 0;
-  size_t held_back = 0;   // moves refused (summed over iterations) because a face would flip or become a needle
+  size_t held_back = 0;   // vertex moves undone (summed over iterations): see fit_to_surface
 };
 
-// Moves the vertices of `mesh` whose `fixed` flag is 0 (one flag per vertex) toward the
-// least-squares fit above. Guarantees: fixed vertices keep their positions bit for bit;
+// Moves the vertices of `mesh` (compacted: no deleted elements) whose `fixed` flag is 0
+// (one flag per vertex; std::invalid_argument otherwise) toward the least-squares fit above.
+// UVs are kept as they are: a moved vertex keeps its UV (free vertices are meant to be off
+// seams, where a vertex has one UV; the moves are of the order of the distance to the
+// input). Guarantees: fixed vertices keep their positions bit for bit;
 // connectivity and UVs are unchanged; no face's normal turns by 90 degrees or more against
 // its normal before the fit, no face becomes degenerate, and no face's aspect ratio rises
 // beyond max_aspect_ratio (moves that would are undone, vertex by vertex); vertex normals

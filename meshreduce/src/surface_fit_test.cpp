@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <stdexcept>
 
 namespace meso {
 namespace {
@@ -90,6 +91,7 @@ TEST(SurfaceFit, AllFixedMovesNothing) {
   EXPECT_EQ(rep.iterations, 0);
   EXPECT_EQ(rep.free_vertices, 0u);
   EXPECT_EQ(std::memcmp(low.points(), fitted.points(), low.n_vertices() * sizeof(Vec3f)), 0);
+  EXPECT_THROW(reduce::fit_to_surface(fitted, reduce::SurfaceFitTarget(high), std::vector<uint8_t>(3, 0)), std::invalid_argument);
 }
 
 }  // namespace

@@ -114,7 +114,7 @@ struct ReduceReport {
   double max_quadric_cost = 0;
   // With max_error: the largest distance from an input sample to the output face it is
   // tracked on, in object units (-1 when not tracked).
-  double tracked_error = -1;
+  double tracked_error = -1;  // (also -1 when best keeps a fitted mesh: the tracking was the reduction's)
   size_t locked_vertices = 0;  // vertices pinned by lock_boundary and lock_groups
   // With ReduceQuality::best: the face-plane weighting chosen ("area" or "uniform") and the
   // measured Hausdorff distance of each candidate (area, uniform), object units.
@@ -140,7 +140,8 @@ struct ReduceReport {
 //  - when the input has UVs: no UV triangle flips or becomes degenerate, the UVs of the
 //    moved vertex are re-fitted (interior vertices: barycentric re-projection of the new
 //    position onto the old neighbourhood; seam/boundary vertices: linear interpolation
-//    along the seam), seams are kept in every chart;
+//    along the seam), seams are kept in every chart (best's surface fit moves interior
+//    vertices only and keeps their UVs: the UV layout is the reduction's);
 //  - boundaries and UV seams are never torn; their vertices only slide along straight parts
 //    and stay on the old seam/boundary polyline; corners of the seam network stay put;
 //  - output faces are compacted (no deleted elements), groups kept per face, vertex normals
@@ -154,7 +155,8 @@ struct ReduceReport {
 // progressive_level(*progressive, k) then equals reduce_mesh with target_faces = k, for
 // every k from the output's face count to the input's. The reduction then runs on the input
 // rebuilt face by face (progressive_base_input). That is the input itself, and the output
-// the same as without `progressive`, for meshes built by add_face in face order (the test
+// the same as without `progressive` (except for best, which fits only without a record),
+// for meshes built by add_face in face order (the test
 // meshes; read_mesh unless a face failed to add, which can leave OpenMesh's boundary links
 // around a non-manifold vertex in another order).
 Mesh reduce_mesh(const Mesh& input, const ReduceOptions& options, ReduceReport* report = nullptr,
