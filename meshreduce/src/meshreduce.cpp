@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <limits>
 #include <memory>
 #include <stdexcept>
@@ -25,6 +26,9 @@ namespace {
 // the sampled value where an output face steps over the input's relief), so the samples
 // are held to this fraction of the target.
 constexpr double kErrorMargin = 0.7;
+
+// The largest output best's surface fit runs on (see reduce_mesh).
+constexpr size_t kMaxFitFaces = 200000;
 
 // The input as a progressive record stores it: live vertices in order, faces in order with
 // their corner order (corner 0 = to-vertex of the face's halfedge), corner UVs, groups.
@@ -203,7 +207,7 @@ Mesh reduce_mesh(const Mesh& input, const ReduceOptions& options, ReduceReport* 
         if (fit) target = std::make_unique<reduce::SurfaceFitTarget>(input);
       });
   // Each candidate measured and, unless the record forbids it, fitted (surface_fit.hpp) and
-  // measured again, as parallel tasks. The fit lowers the RMS distance nearly always, the
+  // measured again. The fit lowers the RMS distance nearly always, the
   // Hausdorff distance usually but not always, and not always most on the candidate that
   // was nearer before it (docs/benchmarks.md): the nearest of the four is kept (ties: the
   // unfitted one, then area).
@@ -211,7 +215,11 @@ Mesh reduce_mesh(const Mesh& input, const ReduceOptions& options, ReduceReport* 
   Mesh fitted[2];
   auto candidate = [&](int k) {
     distance[k] = reference->measure(outputs[k]);
-    if (!fit || reports[k].collapses == 0) {  // nothing reduced (a target at or above the input): nothing to fit
+    // Nothing reduced (a target at or above the input): nothing to fit. Above
+    // kMaxFitFaces output faces the fit's time and memory outgrow its gain, which is at
+    // coarse levels (a 2M-face wall halved: +73 s and +1.2 GB for 0.02 % of the diagonal;
+    // at 105k faces: +11 s, +0.4 GB; docs/benchmarks.md).
+    if (!fit || reports[k].collapses == 0 || outputs[k].n_faces() > kMaxFitFaces) {
       fit_distance[k].hausdorff = std::numeric_limits<double>::infinity();
       return;
     }
@@ -221,7 +229,10 @@ Mesh reduce_mesh(const Mesh& input, const ReduceOptions& options, ReduceReport* 
     reduce::fit_to_surface(fitted[k], *target, fit_fixed_vertices(fitted[k], options), fo);
     fit_distance[k] = reference->measure(fitted[k]);
   };
-  tbb::parallel_invoke([&] { candidate(0); }, [&] { candidate(1); });
+  // One after the other: each measure and fit is parallel inside, and two fits at once
+  // would double the fit's working memory (about 0.6 GB per million output faces).
+  candidate(0);
+  candidate(1);
   int pick = distance[1].hausdorff < distance[0].hausdorff ? 1 : 0;
   bool use_fit = false;
   for (int k = 0; k < 2 && fit; ++k)
@@ -229,7 +240,8 @@ Mesh reduce_mesh(const Mesh& input, const ReduceOptions& options, ReduceReport* 
   ReduceReport rep = reports[pick];
   rep.planes = pick == 1 ? "uniform" : "area";
   rep.candidate_hausdorff = {distance[0].hausdorff, distance[1].hausdorff};
-  if (fit) rep.fitted_hausdorff = {fit_distance[0].hausdorff, fit_distance[1].hausdorff};
+  if (fit && std::isfinite(fit_distance[0].hausdorff) && std::isfinite(fit_distance[1].hausdorff))
+    rep.fitted_hausdorff = {fit_distance[0].hausdorff, fit_distance[1].hausdorff};
   rep.fitted = use_fit;
   rep.distance = use_fit ? fit_distance[pick] : distance[pick];
   if (use_fit) {

@@ -3,7 +3,7 @@
 #include "closest_triangles.hpp"
 
 #include <Eigen/Sparse>
-#include <Eigen/SparseCholesky>
+#include <Eigen/IterativeLinearSolvers>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -315,10 +315,21 @@ SurfaceFitReport fit_to_surface(Mesh& mesh, const SurfaceFitTarget& target, cons
     }
     Eigen::SparseMatrix<double> normal(n_free, n_free);
     normal.setFromTriplets(triplets.begin(), triplets.end());
-    const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(normal);
+    // Conjugate gradients from the current positions (the system is symmetric positive
+    // definite: lambda > 0): linear work and memory per iteration, where a sparse Cholesky
+    // factor of a million-vertex mesh fills in far beyond the matrix. Eigen's sparse
+    // products run in a fixed order: the same bits whatever TBB does.
+    Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper> solver;
+    solver.setTolerance(1e-10);
+    solver.setMaxIterations(500);
+    solver.compute(normal);
     if (solver.info() != Eigen::Success) break;
-    const Eigen::MatrixXd solution = solver.solve(rhs);
-    if (solver.info() != Eigen::Success || !solution.allFinite()) break;
+    Eigen::MatrixXd guess(n_free, 3);
+    for (size_t i = 0; i < nv; ++i)
+      if (unknown[i] >= 0)
+        for (int c = 0; c < 3; ++c) guess(unknown[i], c) = pos[i][c];
+    const Eigen::MatrixXd solution = solver.solveWithGuess(rhs, guess);
+    if (!solution.allFinite()) break;
     ++rep.iterations;
 
     // Move, then undo the moves of the corners of any face the move made unacceptable,

@@ -41,8 +41,9 @@ struct ProgressiveMesh;  // progressive.hpp
 //    (Hoppe et al. 1993's distance energy, two-sided, reweighted toward the largest
 //    distances; meshreduce/src/surface_fit.hpp) except those on boundaries, UV seams and
 //    locks, and the output is the nearest of the four meshes (ties: unfitted, then area).
-//    Costs: two reductions, two fits and four measurements, as parallel tasks (TBB; the
-//    output does not depend on the thread count). With `progressive`, the
+//    Costs: two reductions (parallel tasks), two fits and four measurements (each parallel
+//    inside; TBB; the output does not depend on the thread count). No fit above 200,000
+//    output faces, where its time and memory outgrow its gain. With `progressive`, the
 //    record is the chosen run's (its levels equal that weighting's balanced reduction) and
 //    the output is its last level: no fit; nor with max_normal_deviation below 180 degrees,
 //    which the fit does not check.
