@@ -217,8 +217,8 @@ Mesh reduce_mesh(const Mesh& input, const ReduceOptions& options, ReduceReport* 
     distance[k] = reference->measure(outputs[k]);
     // Nothing reduced (a target at or above the input): nothing to fit. Above
     // kMaxFitFaces output faces the fit's time and memory outgrow its gain, which is at
-    // coarse levels (a 2M-face wall halved: +73 s and +1.2 GB for 0.02 % of the diagonal;
-    // at 105k faces: +11 s, +0.4 GB; docs/benchmarks.md).
+    // coarse levels (a 2M-face wall halved: +73 s and +1.2 GB, for a distance of 0.0007 % of
+    // the diagonal; at 105k faces: +11 s, +0.4 GB; docs/benchmarks.md).
     if (!fit || reports[k].collapses == 0 || outputs[k].n_faces() > kMaxFitFaces) {
       fit_distance[k].hausdorff = std::numeric_limits<double>::infinity();
       return;
@@ -230,7 +230,7 @@ Mesh reduce_mesh(const Mesh& input, const ReduceOptions& options, ReduceReport* 
     fit_distance[k] = reference->measure(fitted[k]);
   };
   // One after the other: each measure and fit is parallel inside, and two fits at once
-  // would double the fit's working memory (about 0.6 GB per million output faces).
+  // would double the fit's working memory (about 1.2 GB per million output faces).
   candidate(0);
   candidate(1);
   int pick = distance[1].hausdorff < distance[0].hausdorff ? 1 : 0;
