@@ -64,19 +64,6 @@ namespace {
 using namespace meso;
 namespace fs = std::filesystem;
 
-// A torus (major radius 1, minor 0.35) with a gentle smooth wave on the tube: smooth
-// everywhere, curvature varying; UV = (s, t) with seams where s and t wrap.
-Mesh make_smooth_torus(int columns, int rows) {
-  return make_parametric_surface(
-      columns, rows,
-      [](double s, double t) {
-        const double u = 2 * M_PI * s, v = 2 * M_PI * t;
-        const double r = 0.35 + 0.04 * std::sin(3 * u) * std::cos(2 * v);
-        const double R = 1.0 + r * std::cos(v);
-        return Vec3f(static_cast<float>(R * std::cos(u)), static_cast<float>(R * std::sin(u)), static_cast<float>(r * std::sin(v)));
-      },
-      true, true, "torus");
-}
 
 double now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
 

@@ -1,6 +1,7 @@
 #include "meso/examples/parametric.hpp"
 
 #include <array>
+#include <cmath>
 
 namespace meso {
 
@@ -26,6 +27,18 @@ Mesh make_parametric_surface(int columns, int rows, const std::function<Vec3f(do
   set_face_groups(m, {name}, {});
   compute_angle_weighted_normals(m);
   return m;
+}
+
+Mesh make_smooth_torus(int columns, int rows) {
+  return make_parametric_surface(
+      columns, rows,
+      [](double s, double t) {
+        const double u = 2 * M_PI * s, v = 2 * M_PI * t;
+        const double r = 0.35 + 0.04 * std::sin(3 * u) * std::cos(2 * v);
+        const double R = 1.0 + r * std::cos(v);
+        return Vec3f(static_cast<float>(R * std::cos(u)), static_cast<float>(R * std::sin(u)), static_cast<float>(r * std::sin(v)));
+      },
+      true, true, "torus");
 }
 
 }  // namespace meso

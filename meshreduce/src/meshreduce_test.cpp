@@ -2,6 +2,7 @@
 #include "meso/meshreduce/surface_distance.hpp"
 
 #include "meso/examples/brick_wall.hpp"
+#include "meso/examples/parametric.hpp"
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -380,14 +381,7 @@ TEST(MeshReduce, ErrorTargetIsRespected) {
 // 178 faces of the 163 asked for, with a Hausdorff distance of 17.6 % of the diagonal (the
 // faces all went to the seams); now 162 faces at 3.4 %.
 TEST(MeshReduce, SeamedTorusReducesAlongCurvedSeams) {
-  const Mesh high = test::make_parametric(
-      128, 64,
-      [](double s, double t) {
-        const double u = 2 * M_PI * s, v = 2 * M_PI * t;
-        const double r = 0.35 + 0.04 * std::sin(3 * u) * std::cos(2 * v), R = 1.0 + r * std::cos(v);
-        return Vec3f(static_cast<float>(R * std::cos(u)), static_cast<float>(R * std::sin(u)), static_cast<float>(r * std::sin(v)));
-      },
-      true, true);
+  const Mesh high = make_smooth_torus(128, 64);
   ReduceOptions o;
   o.target_faces = high.n_faces() / 100;
   ReduceReport r;

@@ -15,4 +15,9 @@ namespace meso {
 Mesh make_parametric_surface(int columns, int rows, const std::function<Vec3f(double, double)>& surface, bool wrap_s, bool wrap_t,
                              const std::string& name = "surface");
 
+// A torus (major radius 1, minor 0.35) with a gentle smooth wave on the tube, named "torus":
+// smooth everywhere, curvature varying; UV = (s, t) with seams where s and t wrap. The
+// meshreduce bench's and tests' smooth surface.
+Mesh make_smooth_torus(int columns, int rows);
+
 }  // namespace meso
