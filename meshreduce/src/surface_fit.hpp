@@ -69,9 +69,9 @@ struct SurfaceFitReport {
 
 // Moves the vertices of `mesh` (compacted: no deleted elements) whose `fixed` flag is 0
 // (one flag per vertex; std::invalid_argument otherwise) toward the least-squares fit above.
-// UVs are kept as they are: a moved vertex keeps its UV (free vertices are meant to be off
-// seams, where a vertex has one UV; the moves are of the order of the distance to the
-// input). Guarantees: fixed vertices keep their positions bit for bit;
+// UVs are kept as they are: a moved vertex keeps the UV of each of its corners (on a seam,
+// one per side; the faces of both sides move with it, so no chart tears; the moves are of
+// the order of the distance to the input). Guarantees: fixed vertices keep their positions bit for bit;
 // connectivity and UVs are unchanged; no face's normal turns by 90 degrees or more against
 // its normal before the fit, no face becomes degenerate, and no face's aspect ratio rises
 // beyond max_aspect_ratio (moves that would are undone, vertex by vertex); vertex normals

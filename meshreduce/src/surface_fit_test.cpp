@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
@@ -65,6 +66,40 @@ TEST(SurfaceFit, BringsACoarseTorusCloserAndKeepsTheFixedVertices) {
   Mesh again = low;
   reduce::fit_to_surface(again, target, fixed);
   EXPECT_EQ(std::memcmp(again.points(), fitted.points(), fitted.n_vertices() * sizeof(Vec3f)), 0);
+}
+
+// Seam vertices are free in best's fit (meshreduce.cpp, fit_fixed_vertices): each corner
+// keeps its UV, so the seams neither tear nor fold, and the seamed torus comes closer than
+// with its seam vertices held (the bench's torus at 1 %: 1.21x -> 0.94x the best peer's
+// Hausdorff distance; docs/benchmarks.md).
+TEST(SurfaceFit, FreeSeamVerticesKeepTheirUvsAndBringTheSeamsCloser) {
+  const Mesh high = make_smooth_torus(128, 64);
+  ReduceOptions o;
+  o.target_faces = 250;
+  const Mesh low = reduce_mesh(high, o);
+  std::vector<uint8_t> seam(low.n_vertices(), 0);
+  for (auto e : low.edges())
+    if (is_uv_seam(low, e))
+      for (int k = 0; k < 2; ++k) seam[static_cast<size_t>(low.to_vertex_handle(low.halfedge_handle(e, static_cast<unsigned>(k))).idx())] = 1;
+  ASSERT_GT(std::count(seam.begin(), seam.end(), 1), 20) << "the torus has seams along both wrap lines";
+  const reduce::SurfaceFitTarget target(high);
+  Mesh held = low, free = low;
+  reduce::fit_to_surface(held, target, seam);
+  reduce::fit_to_surface(free, target, std::vector<uint8_t>(low.n_vertices(), 0));
+  const double h_held = measure_surface_distance(high, held).hausdorff, h_free = measure_surface_distance(high, free).hausdorff;
+  // (Measured: 0.0748 -> 0.0478. The gain is not universal: over 60-2000 faces on this torus
+  // and one twice as fine, free seams were nearer in 6 of 12 cases (by 3-36 %), equal within
+  // 0.01 % in 4, and further in 2 (by 0.4 % at 400 faces, 7 % at 60); best keeps the nearest
+  // of its candidates, fitted or not.)
+  EXPECT_LT(h_free, 0.8 * h_held) << "seams held " << h_held << ", free " << h_free;
+  size_t seam_moved = 0;
+  for (auto v : low.vertices())
+    seam_moved += seam[static_cast<size_t>(v.idx())] && std::memcmp(&low.point(v), &free.point(v), sizeof(Vec3f)) != 0;
+  EXPECT_GT(seam_moved, 0u);
+  // Every corner keeps its UV (both sides of each seam), and seam edges stay seams.
+  for (auto h : low.halfedges()) EXPECT_EQ(low.texcoord2D(h), free.texcoord2D(h)) << "halfedge " << h.idx();
+  for (auto e : low.edges()) EXPECT_EQ(is_uv_seam(low, e), is_uv_seam(free, e));
+  for (auto f : low.faces()) EXPECT_GT(OpenMesh::dot(face_normal_of(low, f), face_normal_of(free, f)), 0.0f) << "face " << f.idx();
 }
 
 // With every vertex fixed there is nothing to solve: the mesh comes back unchanged.

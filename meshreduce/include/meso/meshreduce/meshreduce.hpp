@@ -39,8 +39,8 @@ struct ProgressiveMesh;  // progressive.hpp
 //    ties). Neither weighting is better at every budget on the bench meshes (docs/
 //    benchmarks.md). Each candidate's vertices are also fitted to the input surface
 //    (Hoppe et al. 1993's distance energy, two-sided, reweighted toward the largest
-//    distances; meshreduce/src/surface_fit.hpp) except those on boundaries, UV seams and
-//    locks, and the output is the nearest of the four meshes (ties: unfitted, then area).
+//    distances; meshreduce/src/surface_fit.hpp) except those on boundaries and locks (seam
+//    vertices move too: each corner keeps its UV), and the output is the nearest of the four meshes (ties: unfitted, then area).
 //    Costs: two reductions (parallel tasks), two fits and four measurements (each parallel
 //    inside; TBB; the output does not depend on the thread count). No fit above 200,000
 //    output faces, where its time and memory outgrow its gain. With `progressive`, the
@@ -141,10 +141,12 @@ struct ReduceReport {
 //  - when the input has UVs: no UV triangle flips or becomes degenerate, the UVs of the
 //    moved vertex are re-fitted (interior vertices: barycentric re-projection of the new
 //    position onto the old neighbourhood; seam/boundary vertices: linear interpolation
-//    along the seam), seams are kept in every chart (best's surface fit moves interior
-//    vertices only and keeps their UVs: the UV layout is the reduction's);
+//    along the seam), seams are kept in every chart (best's surface fit keeps every UV: the
+//    UV layout is the reduction's);
 //  - boundaries and UV seams are never torn; their vertices only slide along straight parts
-//    and stay on the old seam/boundary polyline; corners of the seam network stay put;
+//    and stay on the old seam/boundary polyline; corners of the seam network stay put
+//    (best's surface fit then moves seam vertices, corners included, as it moves interior
+//    ones, toward the input surface; boundary vertices it leaves where they are);
 //  - output faces are compacted (no deleted elements), groups kept per face, vertex normals
 //    recomputed (angle-weighted);
 //  - locked vertices (lock_boundary, lock_groups) keep their positions bit for bit and
