@@ -12,6 +12,7 @@
 #include <CGAL/Surface_mesh_simplification/edge_collapse.h>
 
 #include <algorithm>
+#include <cmath>
 #include <chrono>
 #include <cstdio>
 
@@ -113,6 +114,10 @@ FlipCount count_flipped(const TriangleSoup& input, const TriangleSoup& output) {
   using Primitive = CGAL::AABB_triangle_primitive<K, std::vector<K::Triangle_3>::const_iterator>;
   CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>> tree(triangles.cbegin(), triangles.cend());
   tree.accelerate_distance_queries();
+  double edges = 0;
+  for (const auto& t : triangles)
+    for (int e = 0; e < 3; ++e) edges += std::sqrt(CGAL::squared_distance(t[e], t[(e + 1) % 3]));
+  const double mean_edge = triangles.empty() ? 1.0 : edges / (3.0 * static_cast<double>(triangles.size()));
   FlipCount c;
   for (const auto& t : output.triangles) {
     const K::Vector_3 n = normal(output, t);
@@ -120,10 +125,22 @@ FlipCount count_flipped(const TriangleSoup& input, const TriangleSoup& output) {
       ++c.degenerate;
       continue;
     }
-    const Point centroid = CGAL::centroid(point(output, t[0]), point(output, t[1]), point(output, t[2]));
-    const auto nearest = tree.closest_point_and_primitive(centroid);
-    const K::Triangle_3& tri = *nearest.second;
-    const K::Vector_3 m = CGAL::cross_product(tri[1] - tri[0], tri[2] - tri[0]);
+    // The centroids of the face's k x k subdivision, k its longest edge over the input's mean
+    // edge length (at least 4, at most 64): about one sample per input triangle it covers.
+    // Barycentric ((i + 1/3) / k, (j + 1/3) / k) for i + j <= k - 1 (upright sub-triangles)
+    // and ((i + 2/3) / k, (j + 2/3) / k) for i + j <= k - 2.
+    const Point a = point(output, t[0]), b = point(output, t[1]), cc = point(output, t[2]);
+    const double longest = std::sqrt(std::max({CGAL::squared_distance(a, b), CGAL::squared_distance(b, cc), CGAL::squared_distance(cc, a)}));
+    const int k = static_cast<int>(std::clamp(std::ceil(longest / mean_edge), 4.0, 64.0));
+    K::Vector_3 m(0, 0, 0);
+    for (int up = 1; up <= 2; ++up)
+      for (int i = 0; i + up <= k; ++i)
+        for (int j = 0; i + j + up <= k; ++j) {
+          const double u = (i + up / 3.0) / k, v = (j + up / 3.0) / k;
+          const Point p = a + u * (b - a) + v * (cc - a);
+          const K::Triangle_3& tri = *tree.closest_point_and_primitive(p).second;
+          m = m + CGAL::cross_product(tri[1] - tri[0], tri[2] - tri[0]);
+        }
     if (n * m < 0) ++c.flipped;
   }
   return c;

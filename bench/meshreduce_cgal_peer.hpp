@@ -20,10 +20,13 @@ struct CgalResult {
 };
 CgalResult run_cgal_garland_heckbert(const TriangleSoup& in, size_t target_faces, int repeat);
 
-// Output faces whose normal points away from the input's: the unit normal of each
-// non-degenerate output triangle against that of the input triangle closest to its centroid
-// (CGAL AABB tree); negative dot product = flipped. Degenerate output triangles are counted
-// apart.
+// Output faces whose normal points away from the input's: the normal of each non-degenerate
+// output triangle against the input's normal around it, the sum of the area-weighted
+// normals of the input triangles closest to points spread evenly over it, about one per
+// input triangle it covers and at least 16 (CGAL AABB tree); negative dot product = flipped. (The input
+// triangle closest to the centroid alone, the count before 2026-12-02, flags faces that span
+// a sharp edge, e.g. one facing 0.9 up on the brick wall whose centroid is nearest to a
+// brick's side, cos -0.02 to -0.14.) Degenerate output triangles are counted apart.
 struct FlipCount {
   size_t flipped = 0, degenerate = 0;
 };

@@ -134,7 +134,9 @@ struct ReduceReport {
 // Returns the reduced mesh. Guarantees:
 //  - every collapse passes OpenMesh's topological test (is_collapse_ok: manifold, no
 //    duplicate faces);
-//  - no face normal flips, and no output face deviates more than max_normal_deviation from
+//  - no face normal flips: no collapse turns a face by 90 degrees or more, and no face
+//    faces against the input faces it replaced (its normal against the sum of their
+//    area-weighted normals); no output face deviates more than max_normal_deviation from
 //    the input faces it replaced; no collapse creates a needle beyond max_aspect_ratio (and
 //    best's surface fit turns no face by 90 degrees or more and makes none a needle beyond
 //    it either);
