@@ -431,19 +431,12 @@ TEST(MeshReduce, BrickWallStaysCloseAndOriented) {
   EXPECT_LE(d.hausdorff, 1.2 * w.amplitude);
 }
 
-// No output face faces against the input surface under it: its normal against the sum of
-// the area-weighted normals of the input triangles nearest to points spread over it, about
-// one per input triangle it covers (the bench's flip count, bench/meshreduce_cgal_peer.hpp).
-// Checking each collapse against the face's normal before it let turns add up: this wall
-// had faces at cos -0.70 (400 faces) and -0.36 (1,000) against the input under them; the
-// faces now also keep the summed normals of the input faces they replaced and may not face
-// against those (NoFlip in modules.hpp).
-TEST(MeshReduce, NoFaceFacesAgainstTheInputUnderIt) {
+// The faces of `low` that face against the input surface under them: their normal against
+// the sum of the area-weighted normals of the input triangles nearest to points spread over
+// the face, about one per input triangle it covers and at least 16 (the bench's flip count,
+// bench/meshreduce_cgal_peer.hpp).
+std::vector<int> faces_against_input(const Mesh& high, const Mesh& low) {
   using reduce::Vec3d;
-  BrickWallOptions w;
-  w.columns = 128;
-  w.rows = 64;
-  const Mesh high = make_brick_wall(w);
   std::vector<reduce::Triangle> tris;
   double edge = 0;
   for (auto f : high.faces()) {
@@ -455,27 +448,41 @@ TEST(MeshReduce, NoFaceFacesAgainstTheInputUnderIt) {
   }
   edge /= 3.0 * static_cast<double>(tris.size());
   const reduce::ClosestTriangles nearest(tris);
+  std::vector<int> against;
+  for (auto f : low.faces()) {
+    const auto hs = face_halfedges(low, f);
+    const Vec3d a = reduce::point(low.point(low.to_vertex_handle(hs[0]))), b = reduce::point(low.point(low.to_vertex_handle(hs[1]))),
+                c = reduce::point(low.point(low.to_vertex_handle(hs[2])));
+    const double longest = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
+    const int k = static_cast<int>(std::clamp(std::ceil(longest / edge), 4.0, 64.0));
+    Vec3d under(0, 0, 0);
+    for (int up = 1; up <= 2; ++up)
+      for (int i = 0; i + up <= k; ++i)
+        for (int j = 0; i + j + up <= k; ++j) {
+          const Vec3d p = a + (i + up / 3.0) / k * (b - a) + (j + up / 3.0) / k * (c - a);
+          const reduce::Triangle& t = tris[static_cast<size_t>(nearest.nearest(p).second)];
+          under += OpenMesh::cross(t.b - t.a, t.c - t.a);
+        }
+    if (OpenMesh::dot(OpenMesh::cross(b - a, c - a), under) < 0) against.push_back(f.idx());
+  }
+  return against;
+}
+
+// No output face faces against the input surface under it (faces_against_input). Checking
+// each collapse against the face's normal before it let turns add up: this wall had faces at
+// cos -0.70 (400 faces) and -0.36 (1,000) against the input under them; the faces now also
+// keep the summed normals of the input faces they replaced and may not face against those
+// (NoFlip in modules.hpp).
+TEST(MeshReduce, NoFaceFacesAgainstTheInputUnderIt) {
+  BrickWallOptions w;
+  w.columns = 128;
+  w.rows = 64;
+  const Mesh high = make_brick_wall(w);
   for (const auto& [quality, faces] : {std::pair{ReduceQuality::balanced, 400}, std::pair{ReduceQuality::fast, 1000}}) {
     ReduceOptions o;
     o.target_faces = static_cast<size_t>(faces);
     o.quality = quality;
-    const Mesh low = reduce_mesh(high, o);
-    for (auto f : low.faces()) {
-      const auto hs = face_halfedges(low, f);
-      const Vec3d a = reduce::point(low.point(low.to_vertex_handle(hs[0]))), b = reduce::point(low.point(low.to_vertex_handle(hs[1]))),
-                  c = reduce::point(low.point(low.to_vertex_handle(hs[2])));
-      const double longest = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
-      const int k = static_cast<int>(std::clamp(std::ceil(longest / edge), 4.0, 64.0));
-      Vec3d under(0, 0, 0);
-      for (int up = 1; up <= 2; ++up)
-        for (int i = 0; i + up <= k; ++i)
-          for (int j = 0; i + j + up <= k; ++j) {
-            const Vec3d p = a + (i + up / 3.0) / k * (b - a) + (j + up / 3.0) / k * (c - a);
-            const reduce::Triangle& t = tris[static_cast<size_t>(nearest.nearest(p).second)];
-            under += OpenMesh::cross(t.b - t.a, t.c - t.a);
-          }
-      EXPECT_GE(OpenMesh::dot(OpenMesh::cross(b - a, c - a), under), 0.0) << faces << " faces: face " << f.idx();
-    }
+    EXPECT_EQ(faces_against_input(high, reduce_mesh(high, o)), std::vector<int>{}) << faces << " faces";
   }
 }
 
@@ -646,7 +653,7 @@ const ReduceQuality kQualities[] = {ReduceQuality::fast, ReduceQuality::balanced
 const char* name_of(ReduceQuality q) { return q == ReduceQuality::fast ? "fast" : q == ReduceQuality::best ? "best" : "balanced"; }
 
 // Every preset keeps every guarantee: the face count, no flips (every face faces out of the
-// wall's cylinder), no needles, valid UVs, a manifold outline (each vertex has at most one
+// wall's cylinder, and none faces against the input under it), no needles, valid UVs, a manifold outline (each vertex has at most one
 // boundary gap), and the same bytes on a second run.
 TEST(MeshReduce, EveryPresetKeepsTheGuaranteesOnTheBrickWall) {
   BrickWallOptions w;
@@ -668,7 +675,11 @@ TEST(MeshReduce, EveryPresetKeepsTheGuaranteesOnTheBrickWall) {
       const auto hs = face_halfedges(low, f);
       Vec3f centre(0, 0, 0);
       for (auto h : hs) centre += low.point(low.to_vertex_handle(h)) / 3.0f;
-      EXPECT_GT(OpenMesh::dot(face_normal(low, f), Vec3f(centre[0], 0, centre[2] + w.bend_radius)), 0.0f) << "face " << f.idx();
+      // (best's fit may tilt a face over a brick's side a hair past the radial plane, as the
+      // side itself is: there the test is the input under the face, below.)
+      if (q != ReduceQuality::best || !r.fitted) {
+        EXPECT_GT(OpenMesh::dot(face_normal(low, f), Vec3f(centre[0], 0, centre[2] + w.bend_radius)), 0.0f) << "face " << f.idx();
+      }
       const Vec3f a = low.point(low.to_vertex_handle(hs[0])), b = low.point(low.to_vertex_handle(hs[1])),
                   c = low.point(low.to_vertex_handle(hs[2]));
       const float longest = std::max({(b - a).sqrnorm(), (c - b).sqrnorm(), (a - c).sqrnorm()});
@@ -691,6 +702,7 @@ TEST(MeshReduce, EveryPresetKeepsTheGuaranteesOnTheBrickWall) {
       EXPECT_GE(radius, w.bend_radius - 0.2f * w.amplitude - slack);
       EXPECT_LE(radius, w.bend_radius + 1.6f * w.amplitude + slack);
     }
+    EXPECT_EQ(faces_against_input(high, low), std::vector<int>{});
     EXPECT_TRUE(same_bytes(low, reduce_mesh(high, o))) << "deterministic";
   }
 }
