@@ -85,7 +85,7 @@ std::vector<uint8_t> group_vertices(const Mesh& mesh, const std::vector<std::str
 // sides, each corner keeping its own UV, so a move neither tears nor folds a chart; the seam
 // moves with the surface as interior vertices do, by the order of the distance to the input
 // (well within seam_tolerance). Held fixed they kept the seamed torus at 1.21x and 1.33x the
-// best peer's Hausdorff distance at 1 % and 0.1 % (0.94x and 1.02x free; docs/benchmarks.md).
+// best peer's Hausdorff distance at 1 % and 0.1 % (free: 0.94x and 1.08x; docs/benchmarks.md).
 std::vector<uint8_t> fit_fixed_vertices(const Mesh& mesh, const ReduceOptions& options) {
   std::vector<uint8_t> fixed = boundary_vertices(mesh);
   if (!options.lock_groups.empty()) {
