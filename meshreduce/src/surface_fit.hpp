@@ -49,8 +49,9 @@ class SurfaceFitTarget {
 struct SurfaceFitOptions {
   // Solves. 10 rather than 6: more steps of the reweighting at high powers; on the bench
   // the seamed torus at 0.1 % went 0.906 -> 0.861 % of the diagonal, the bricks at 1 % and
-  // 0.1 % 0.300 -> 0.293 and 1.166 -> 1.143, for about 0.1 s per candidate on 262k input
-  // faces (docs/benchmarks.md).
+  // 0.1 % 0.300 -> 0.293 and 1.166 -> 1.143 (at 10 %, 0.0099 -> 0.0102 and 0.0402 ->
+  // 0.0405), for 0.16-0.7 s more per candidate on 262k input faces, the most at 26k output
+  // faces (measured under load 3; docs/benchmarks.md).
   int iterations = 10;
   // Residuals weighted by (distance / RMS distance)^(power - 2), raised from 2 (least
   // squares) to `power` over the iterations: iteratively reweighted least squares toward
