@@ -14,6 +14,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <map>
 #include <vector>
 
@@ -675,11 +676,12 @@ TEST(MeshReduce, EveryPresetKeepsTheGuaranteesOnTheBrickWall) {
       const auto hs = face_halfedges(low, f);
       Vec3f centre(0, 0, 0);
       for (auto h : hs) centre += low.point(low.to_vertex_handle(h)) / 3.0f;
-      // (best's fit may tilt a face over a brick's side a hair past the radial plane, as the
-      // side itself is: there the test is the input under the face, below.)
-      if (q != ReduceQuality::best || !r.fitted) {
-        EXPECT_GT(OpenMesh::dot(face_normal(low, f), Vec3f(centre[0], 0, centre[2] + w.bend_radius)), 0.0f) << "face " << f.idx();
-      }
+      // (best's fit may tilt a face over a brick's side a hair past the radial plane, which
+      // the side itself lies in: measured cos -1e-3; there the cosine may be down to -0.05,
+      // and faces_against_input below tests against the input under the face.)
+      const Vec3f n = face_normal(low, f), radial(centre[0], 0, centre[2] + w.bend_radius);
+      const float floor = q == ReduceQuality::best && r.fitted ? -0.05f * n.norm() * radial.norm() : 0.0f;
+      EXPECT_GT(OpenMesh::dot(n, radial), floor) << "face " << f.idx();
       const Vec3f a = low.point(low.to_vertex_handle(hs[0])), b = low.point(low.to_vertex_handle(hs[1])),
                   c = low.point(low.to_vertex_handle(hs[2]));
       const float longest = std::max({(b - a).sqrnorm(), (c - b).sqrnorm(), (a - c).sqrnorm()});
@@ -745,6 +747,55 @@ TEST(MeshReduce, BestKeepsTheNearerOfTwoWeightings) {
   EXPECT_TRUE(same_bytes(best, reduce_mesh(high, o, &r1)));
   EXPECT_EQ(r1.candidate_hausdorff, r.candidate_hausdorff);
   EXPECT_EQ(r1.fitted_hausdorff, r.fitted_hausdorff);
+}
+
+// best's fit moves UV-seam vertices (only boundary and locked ones are held), tethered to
+// within seam_tolerance of where the reduction left them, on the input's seam: most seam
+// vertices move, and every one stays within seam_tolerance of the input's seam polylines (the
+// reduction's own slides keep them within it too: ChartGuard). (Without
+// the tether, a 100-face version of a twice finer torus had seam vertices 4.6 % of the
+// diagonal off the seam.)
+TEST(MeshReduce, BestFitMovesSeamVerticesWithinTheSeamTolerance) {
+  using reduce::Vec3d;
+  const Mesh high = make_smooth_torus(128, 64);
+  std::vector<std::pair<Vec3d, Vec3d>> seams;
+  for (auto e : high.edges())
+    if (is_uv_seam(high, e))
+      seams.emplace_back(reduce::point(high.point(high.from_vertex_handle(high.halfedge_handle(e, 0)))),
+                         reduce::point(high.point(high.to_vertex_handle(high.halfedge_handle(e, 0)))));
+  ASSERT_FALSE(seams.empty());
+  const double diagonal = static_cast<double>(bounding_box(high).diagonal());
+  for (const size_t faces : {size_t{100}}) {
+    ReduceOptions o;
+    o.target_faces = faces;
+    o.quality = ReduceQuality::best;
+    ReduceReport r;
+    const Mesh low = reduce_mesh(high, o, &r);
+    ASSERT_TRUE(r.fitted) << faces << " faces: the fitted mesh is the nearest here";
+    // The area candidate is balanced's output bit for bit (BestKeepsTheNearerOfTwoWeightings):
+    // the fit's moves are the differences from it.
+    ASSERT_EQ(r.planes, "area");
+    ReduceOptions plain = o;
+    plain.quality = ReduceQuality::balanced;
+    const Mesh unfitted = reduce_mesh(high, plain);
+    ASSERT_EQ(unfitted.n_vertices(), low.n_vertices());
+    size_t seam_vertices = 0, moved = 0;
+    std::vector<uint8_t> done(low.n_vertices(), 0);
+    for (auto e : low.edges()) {
+      if (!is_uv_seam(low, e)) continue;
+      for (unsigned k = 0; k < 2; ++k) {
+        const auto v = low.to_vertex_handle(low.halfedge_handle(e, k));
+        if (done[static_cast<size_t>(v.idx())]++) continue;
+        double d = std::numeric_limits<double>::infinity();
+        for (const auto& [a, b] : seams) d = std::min(d, reduce::point_segment_distance(reduce::point(low.point(v)), a, b));
+        EXPECT_LE(d, static_cast<double>(o.seam_tolerance) * diagonal) << faces << " faces: seam vertex " << v.idx();
+        ++seam_vertices;
+        moved += !(low.point(v) == unfitted.point(v));
+      }
+    }
+    EXPECT_GT(seam_vertices, 0u);
+    EXPECT_GT(moved, seam_vertices / 2) << faces << " faces: the fit moved " << moved << " of " << seam_vertices << " seam vertices";
+  }
 }
 
 // fast trades error for evaluations: on the sphere and on the bricks its Hausdorff distance

@@ -132,18 +132,16 @@ class NoFlip final : public CollapseModule {
       if (f.adjacent_fl) input += removed_l;
       if (f.adjacent_fr) input += removed_r;
       merged_.push_back(input);
-      const Vec3d n0 = old_normal(f);
-      const double l0 = n0.sqrnorm();
-      if (!(l0 > 0)) continue;  // already degenerate
       const Vec3d n1 = new_normal(f, c.q);
-      const double l1 = n1.sqrnorm();
+      // Facing against its input (also a face that was degenerate); where the input's normals
+      // cancel out (a sum of zero: a thin fold), nothing to face.
+      if (OpenMesh::dot(n1, input) < 0) return false;
+      const Vec3d n0 = old_normal(f);
+      if (!(n0.sqrnorm() > 0)) continue;  // already degenerate: cannot get worse
       // Degenerate: sin of the corner angle at q below 1e-9.
       const double scale = (f.b - c.q).sqrnorm() * (f.c - c.q).sqrnorm();
-      if (!(l1 > 1e-18 * scale)) return false;
+      if (!(n1.sqrnorm() > 1e-18 * scale)) return false;
       if (OpenMesh::dot(n0, n1) <= 0) return false;
-      // Facing against its input; where the input's normals cancel out (a sum of zero: a
-      // thin fold), nothing to face.
-      if (OpenMesh::dot(n1, input) < 0) return false;
     }
     return true;
   }

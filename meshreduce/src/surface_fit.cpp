@@ -119,6 +119,7 @@ SurfaceFitReport fit_to_surface(Mesh& mesh, const SurfaceFitTarget& target, cons
   const SurfaceFitTarget::Impl& in = target.impl();
   const size_t nv = mesh.n_vertices();
   if (fixed.size() != nv) throw std::invalid_argument("fit_to_surface: one fixed flag per vertex");
+  if (!options.tethered.empty() && options.tethered.size() != nv) throw std::invalid_argument("fit_to_surface: one tethered flag per vertex");
   // Unknowns: the free vertices, numbered in vertex order.
   std::vector<int> unknown(nv, -1);
   int n_free = 0;
@@ -339,7 +340,14 @@ SurfaceFitReport fit_to_surface(Mesh& mesh, const SurfaceFitTarget& target, cons
       if (unknown[i] < 0) continue;
       // As it will be stored (float), so that the checks below hold for the output itself.
       const Eigen::Index u = unknown[i];
-      next[i] = point(Vec3f(static_cast<float>(solution(u, 0)), static_cast<float>(solution(u, 1)), static_cast<float>(solution(u, 2))));
+      Vec3d goal(solution(u, 0), solution(u, 1), solution(u, 2));
+      if (!options.tethered.empty() && options.tethered[i]) {
+        // Back along the move to the tether, less a margin for the rounding to float below.
+        const Vec3d move = goal - original[i];
+        const double length = move.norm(), reach = 0.999 * options.tether;
+        if (length > reach) goal = original[i] + move * (reach / length);
+      }
+      next[i] = point(Vec3f(static_cast<float>(goal[0]), static_cast<float>(goal[1]), static_cast<float>(goal[2])));
     }
     // A face must also keep facing the input where it lies, as the bench counts flips: its
     // normal against that of the input triangle nearest its centroid (unless it faced away

@@ -49,8 +49,8 @@ class SurfaceFitTarget {
 struct SurfaceFitOptions {
   // Solves. 10 rather than 6: more steps of the reweighting at high powers; on the bench
   // the seamed torus at 0.1 % went 0.906 -> 0.861 % of the diagonal, the bricks at 1 % and
-  // 0.1 % 0.300 -> 0.293 and 1.166 -> 1.143 (at 10 %, 0.0099 -> 0.0102 and 0.0402 ->
-  // 0.0405), for 0.16-0.7 s more per candidate on 262k input faces, the most at 26k output
+  // 0.1 % 0.300 -> 0.293 and 1.166 -> 1.143 (at 10 %: torus 0.0099 -> 0.0102, bricks
+  // 0.0402 -> 0.0405), for 0.16-0.7 s more per candidate on 262k input faces, the most at 26k output
   // faces (measured under load 3; docs/benchmarks.md).
   int iterations = 10;
   // Residuals weighted by (distance / RMS distance)^(power - 2), raised from 2 (least
@@ -64,6 +64,11 @@ struct SurfaceFitOptions {
   // As ReduceOptions::max_aspect_ratio: a move may not make a face a needle beyond this
   // (unless it already was one). 0: off.
   float max_aspect_ratio = 40.0f;
+  // Vertices flagged here (one flag per vertex; empty: none) end at most `tether` (object
+  // units) from where they were before the fit: best tethers UV-seam vertices, which the
+  // reduction leaves on the input's seam, to within seam_tolerance of it.
+  std::vector<uint8_t> tethered;
+  double tether = 0;
 };
 
 struct SurfaceFitReport {
@@ -80,7 +85,8 @@ struct SurfaceFitReport {
 // connectivity and UVs are unchanged; no face's normal turns by 90 degrees or more against
 // its normal before the fit, no face becomes degenerate, and no face's aspect ratio rises
 // beyond max_aspect_ratio (moves that would are undone, vertex by vertex); vertex normals
-// are recomputed (angle-weighted). Deterministic whatever the thread count.
+// are recomputed (angle-weighted); tethered vertices end within `tether` of where they were.
+// Deterministic whatever the thread count.
 SurfaceFitReport fit_to_surface(Mesh& mesh, const SurfaceFitTarget& target, const std::vector<uint8_t>& fixed,
                                 const SurfaceFitOptions& options = {});
 

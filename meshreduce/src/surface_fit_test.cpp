@@ -87,10 +87,10 @@ TEST(SurfaceFit, FreeSeamVerticesKeepTheirUvsAndBringTheSeamsCloser) {
   reduce::fit_to_surface(held, target, seam);
   reduce::fit_to_surface(free, target, std::vector<uint8_t>(low.n_vertices(), 0));
   const double h_held = measure_surface_distance(high, held).hausdorff, h_free = measure_surface_distance(high, free).hausdorff;
-  // (Measured: 0.0309 -> 0.0223. The gain is not universal: over 60-2000 faces on this torus
-  // and one half as fine, free seams were nearer in 6 of 12 cases (by 6-28 %), equal within
-  // 0.1 % in 4, and further in 2 (by 0.9 % and 3 %); best keeps the nearest of its
-  // candidates, fitted or not.)
+  // (Measured with 10 solves: 0.0309 -> 0.0216. The gain is not universal: over 60-2000
+  // faces on this torus and one half as fine, free seams were nearer in 6 of 12 cases (by
+  // 7-30 %), equal within 0.3 % in 4, and further in 2 (by 1.6 % and 3 %); best keeps the
+  // nearest of its candidates, fitted or not.)
   EXPECT_LT(h_free, 0.85 * h_held) << "seams held " << h_held << ", free " << h_free;
   size_t seam_moved = 0;
   for (auto v : low.vertices())

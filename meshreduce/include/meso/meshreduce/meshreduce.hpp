@@ -134,10 +134,12 @@ struct ReduceReport {
 // Returns the reduced mesh. Guarantees:
 //  - every collapse passes OpenMesh's topological test (is_collapse_ok: manifold, no
 //    duplicate faces);
-//  - no face normal flips: no collapse turns a face by 90 degrees or more, and no face
-//    faces against the input faces it replaced (its normal against the sum of their
-//    area-weighted normals); no output face deviates more than max_normal_deviation from
-//    the input faces it replaced; no collapse creates a needle beyond max_aspect_ratio (and
+//  - no face normal flips: no collapse turns a face by 90 degrees or more, nor makes it face
+//    against the input faces it replaced (its normal against the sum of their area-weighted
+//    normals; best's fit checks its moves against the input nearest each face instead, see
+//    below); no output face deviates more than max_normal_deviation from the input faces it
+//    replaced. (Measured against the input nearest each face, the bench's flip count, a
+//    face can still face against it, rarely: docs/benchmarks.md); no collapse creates a needle beyond max_aspect_ratio (and
 //    best's surface fit turns no face by 90 degrees or more and makes none a needle beyond
 //    it either);
 //  - when the input has UVs: no UV triangle flips or becomes degenerate, the UVs of the
@@ -148,7 +150,9 @@ struct ReduceReport {
 //  - boundaries and UV seams are never torn; their vertices only slide along straight parts
 //    and stay on the old seam/boundary polyline; corners of the seam network stay put
 //    (best's surface fit then moves seam vertices, corners included, as it moves interior
-//    ones, toward the input surface; boundary vertices it leaves where they are);
+//    ones, toward the input surface, but no further than seam_tolerance from where they
+//    were: they end within seam_tolerance of the input's seam; boundary vertices it leaves
+//    where they are);
 //  - output faces are compacted (no deleted elements), groups kept per face, vertex normals
 //    recomputed (angle-weighted);
 //  - locked vertices (lock_boundary, lock_groups) keep their positions bit for bit and
