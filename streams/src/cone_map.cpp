@@ -478,12 +478,23 @@ class ConeSearch {
   // (f_k is linear along an edge: one interval) and the arcs of the curve f_k = 0 inside R
   // (a hyperbola's branches, each monotone), searched in one dimension by branch and bound.
   // Returns false (nothing done) on a degenerate curve, where the caller refines instead.
+  // Where a component of grad S keeps its sign over R, one side of F gives the smaller term
+  // along that axis at every point of R (gx (x - fx) is least at fx = F's right edge where
+  // gx >= 0, at its left edge where gx <= 0; falls() takes the same minimum): the other
+  // side's D_k lie inside that side's over R and cannot hold a larger supremum, so only the
+  // one side is searched (on the bricks the signs are constant on 3 rectangles out of 4).
   bool crossed(const Piece& p, double s0, double t0, double s1, double t1) {
     std::array<Bilinear, 4> fk{};
     std::array<std::array<double, 4>, 4> fv{};
     int n = 0;
+    // dS/dx is affine in t and dS/dy in s: the ends decide their signs over R.
+    const double gx0 = p.gx(t0), gx1 = p.gx(t1), gy0 = p.gy(s0), gy1 = p.gy(s1);
+    const bool x_rises = gx0 >= 0 && gx1 >= 0, x_falls = gx0 <= 0 && gx1 <= 0;
+    const bool y_rises = gy0 >= 0 && gy1 >= 0, y_falls = gy0 <= 0 && gy1 <= 0;
     for (double fx : {f_.x0, f_.x1})
       for (double fy : {f_.y0, f_.y1}) {
+        if ((fx == f_.x0 && x_rises) || (fx == f_.x1 && x_falls && !x_rises)) continue;
+        if ((fy == f_.y0 && y_rises) || (fy == f_.y1 && y_falls && !y_rises)) continue;
         const double dx = p.x0 - fx, dy = p.y0 - fy;
         // 2 (a + e t)(dx + s / 2) + 2 (b + e s)(dy + t / 2)
         const Bilinear q{2 * (p.a * dx + p.b * dy), p.a + 2 * p.e * dy, p.b + 2 * p.e * dx, 2 * p.e};
