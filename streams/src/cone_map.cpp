@@ -1233,8 +1233,11 @@ class BlockSearch {
       if (keep == 0) continue;
       if (n.level > 0) {
         const size_t index = tree_.index(n.level, n.x, n.y);
-        keep = planes(&tree_.plane[static_cast<size_t>(n.level)][index * 3], r, top, s, keep, apart);
-        if (keep != 0 && relaxed_) keep = rising(&tree_.gradient[static_cast<size_t>(n.level)][index * 4], r, b, keep);
+        // Relaxed cones test the gradient box before the planes: their slopes are lower, so
+        // 77 % of their plane tests fail (bricks, 256²), and the box, shared by the block's
+        // texels, costs less per texel (bricks relaxed -3 % instructions; leaves too).
+        if (relaxed_) keep = rising(&tree_.gradient[static_cast<size_t>(n.level)][index * 4], r, b, keep);
+        if (keep != 0) keep = planes(&tree_.plane[static_cast<size_t>(n.level)][index * 3], r, top, s, keep, apart & keep);
         if (keep == 0) continue;
       } else {
         if (near_) {
@@ -1255,8 +1258,8 @@ class BlockSearch {
           if (r.x0 == footprint_[k].x0 || r.y0 == footprint_[k].y0) whole |= Mask{1} << k;
         }
         if (!relaxed_) apart &= ~whole;
-        if (apart != 0) keep = planes(leaves_.plane(n.x, n.y), r, top, s, keep, apart);
-        if (keep != 0 && relaxed_) keep = rising(leaves_.box(n.x, n.y), r, b, keep);
+        if (relaxed_) keep = rising(leaves_.box(n.x, n.y), r, b, keep);
+        if ((apart & keep) != 0) keep = planes(leaves_.plane(n.x, n.y), r, top, s, keep, apart & keep);
         if (keep == 0) continue;
         std::array<Piece, 4> pieces = {piece(ox, oy, 2 * n.x, 2 * n.y), piece(ox, oy, 2 * n.x + 1, 2 * n.y), piece(ox, oy, 2 * n.x, 2 * n.y + 1),
                                        piece(ox, oy, 2 * n.x + 1, 2 * n.y + 1)};
