@@ -594,6 +594,74 @@ class ConeSearch {
     return true;
   }
 
+  // Side zone: the maximum of psi along one monotone arc of f = 0 (its ends attained by the
+  // caller) in closed form, as edge_maximum's along a segment. Parametrised by u, the local
+  // coordinate along which the arc extends further (s or t), the other coordinate is
+  // w(u) = -(P + Q u) / (R + E u), R + E u keeping its sign on a branch (see arcs()); then
+  // S - T = N(u) / (R + E u) with N quadratic, and the gap to F, affine in u or in w, makes
+  // psi = N / D with D a product of two affine factors or affine. Where the gap is positive
+  // over the arc (at both ends: it is monotone along it) psi is smooth there, so its maximum
+  // is at an end or where N' D - N D' = 0, a quadratic (the cubic terms cancel): the
+  // supremum over the arc, attained, instead of a search whose boxes close only linearly
+  // (most of the arcs' instructions on the bricks). Returns false, leaving the arc to the
+  // search, where the gap vanishes at an end (the arc reaches F's edge, where S = T makes
+  // psi tend to a limit) or the arc is a point.
+  bool side_arc(const Piece& p, const Bilinear& f, const std::array<double, 4>& e) {
+    if (!(piece_distance(p.x(e[0]), p.y(e[1])) > 0) || !(piece_distance(p.x(e[2]), p.y(e[3])) > 0)) return false;
+    const bool along_s = std::abs(e[2] - e[0]) >= std::abs(e[3] - e[1]);
+    const double ua = along_s ? e[0] : e[1], ub = along_s ? e[2] : e[3];
+    const double wa = along_s ? e[1] : e[0], wb = along_s ? e[3] : e[2];
+    if (ua == ub) return false;
+    // S = c + g u + (h + e u) w and f = P + Q u + R w + E u w.
+    const double g = along_s ? p.a : p.b, h = along_s ? p.b : p.a;
+    const double fp = f.a, fq = along_s ? f.b : f.c, fr = along_s ? f.c : f.b, fe = f.e;
+    const double c0 = p.c - top_;
+    const double n0 = c0 * fr - h * fp, n1 = c0 * fe + g * fr - h * fq - p.e * fp, n2 = g * fe - p.e * fq;
+    // The gap z (v / 2 + origin - edge) = alpha + beta v, v the local coordinate across F's
+    // edge (s beside F's left or right side, t above or below it).
+    const bool beside_x = zy_ == 0;
+    const double z = beside_x ? zx_ : zy_;
+    const double edge = beside_x ? (zx_ > 0 ? f_.x1 : f_.x0) : (zy_ > 0 ? f_.y1 : f_.y0);
+    const double alpha = z * ((beside_x ? p.x0 : p.y0) - edge), beta = 0.5 * z;
+    double q0, q1, q2;
+    if (beside_x == along_s) {  // the gap is affine in u: D = (R + E u)(alpha + beta u)
+      q0 = fr * alpha;
+      q1 = fr * beta + fe * alpha;
+      q2 = fe * beta;
+    } else {  // affine in w: D = alpha (R + E u) - beta (P + Q u)
+      q0 = alpha * fr - beta * fp;
+      q1 = alpha * fe - beta * fq;
+      q2 = 0;
+    }
+    // N' D - N D' = k2 u^2 + 2 k1 u + k0.
+    const double k2 = n2 * q1 - n1 * q2, k1 = n2 * q0 - n0 * q2, k0 = n1 * q0 - n0 * q1;
+    std::array<double, 2> roots{};
+    int count = 0;
+    if (k2 == 0) {
+      if (k1 != 0) roots[static_cast<size_t>(count++)] = -k0 / (2 * k1);
+    } else {
+      const double disc = k1 * k1 - k2 * k0;
+      if (disc >= 0) {
+        // The stable pair of formulas (no cancellation between -k1 and the root).
+        const double r = -(k1 + std::copysign(std::sqrt(disc), k1));
+        roots[static_cast<size_t>(count++)] = r / k2;
+        if (r != 0) roots[static_cast<size_t>(count++)] = k0 / r;
+      }
+    }
+    const double ulo = std::min(ua, ub), uhi = std::max(ua, ub), wlo = std::min(wa, wb), whi = std::max(wa, wb);
+    for (int k = 0; k < count; ++k) {
+      const double u = roots[static_cast<size_t>(k)];
+      if (!(u > ulo && u < uhi)) continue;
+      const double w = std::clamp(-(fp + fq * u) / (fr + fe * u), wlo, whi);
+      if (along_s) {
+        attain_closure(p, u, w);
+      } else {
+        attain_closure(p, w, u);
+      }
+    }
+    return true;
+  }
+
   // Branch and bound along one monotone arc of f = 0 between (arc[0], arc[1]) and (arc[2],
   // arc[3]): the arc lies in the box of its ends, whose bound (side_upper / corner_upper)
   // holds for it; boxes are halved along the arc until the bound is within the tolerance
@@ -601,6 +669,7 @@ class ConeSearch {
   void search_arc(const Piece& p, const Bilinear& f, const std::array<double, 4>& whole) {
     attain_closure(p, whole[0], whole[1]);
     attain_closure(p, whole[2], whole[3]);
+    if ((zx_ == 0 || zy_ == 0) && side_arc(p, f, whole)) return;
     struct Arc {
       std::array<double, 4> e;
       int depth;
