@@ -596,82 +596,185 @@ class ConeSearch {
     return true;
   }
 
-  // Side zone: the maximum of psi along one monotone arc of f = 0 (its ends attained by the
-  // caller) in closed form, as edge_maximum's along a segment. Parametrised by u, the local
-  // coordinate along which the arc extends further (s or t), the other coordinate is
-  // w(u) = -(P + Q u) / (R + E u), R + E u keeping its sign on a branch (see arcs()); then
-  // S - T = N(u) / (R + E u) with N quadratic, and the gap to F, affine in u or in w, makes
-  // psi = N / D with D a product of two affine factors or affine. Where the gap is positive
-  // over the arc (at both ends: it is monotone along it) psi is smooth there, so its maximum
-  // is at an end or where N' D - N D' = 0, a quadratic (the cubic terms cancel): the
-  // supremum over the arc, attained, instead of a search whose boxes close only linearly
-  // (most of the arcs' instructions on the bricks). Returns false, leaving the arc to the
-  // search, where the gap vanishes at an end (the arc reaches F's edge, where S = T makes
+  // An arc of f = 0 between its ends e (s, t, s, t), parametrised by u, the local coordinate
+  // along which it extends further (s or t); the other coordinate is w(u) = -(P + Q u) /
+  // (R + E u), R + E u keeping its sign on a branch (see arcs()). On it
+  // S - T = N(u) / (R + E u), N quadratic: S = c + g u + (h + e u) w gives
+  // (S - T)(R + E u) = (c - T + g u)(R + E u) - (h + e u)(P + Q u).
+  struct ArcForm {
+    bool along_s;
+    double u0, u1, wlo, whi;  // the ends' u, and the range of w
+    double fp, fq, fr, fe;    // f = P + Q u + R w + E u w
+    std::array<double, 3> n;  // N's coefficients, constant first
+    double w(double u) const { return std::clamp(-(fp + fq * u) / (fr + fe * u), wlo, whi); }
+  };
+  ArcForm arc_form(const Piece& p, const Bilinear& f, const std::array<double, 4>& e) const {
+    ArcForm a;
+    a.along_s = std::abs(e[2] - e[0]) >= std::abs(e[3] - e[1]);
+    a.u0 = a.along_s ? e[0] : e[1];
+    a.u1 = a.along_s ? e[2] : e[3];
+    a.wlo = std::min(a.along_s ? e[1] : e[0], a.along_s ? e[3] : e[2]);
+    a.whi = std::max(a.along_s ? e[1] : e[0], a.along_s ? e[3] : e[2]);
+    const double g = a.along_s ? p.a : p.b, h = a.along_s ? p.b : p.a;
+    a.fp = f.a;
+    a.fq = a.along_s ? f.b : f.c;
+    a.fr = a.along_s ? f.c : f.b;
+    a.fe = f.e;
+    const double c0 = p.c - top_;
+    a.n = {c0 * a.fr - h * a.fp, c0 * a.fe + g * a.fr - h * a.fq - p.e * a.fp, g * a.fe - p.e * a.fq};
+    return a;
+  }
+  void attain_on(const Piece& p, const ArcForm& a, double u) {
+    if (a.along_s) {
+      attain_closure(p, u, a.w(u));
+    } else {
+      attain_closure(p, a.w(u), u);
+    }
+  }
+
+  // The maximum over [u0, u1] of N(u) / D(u), N and D quadratics (constant coefficient
+  // first) and D without a zero there, and where it is: at an end or where
+  // N' D - N D' = k2 u^2 + 2 k1 u + k0 = 0 (the cubic terms cancel).
+  static double rational_max(const std::array<double, 3>& n, const std::array<double, 3>& d, double u0, double u1, double& arg) {
+    auto ratio = [&](double u) { return (n[0] + u * (n[1] + u * n[2])) / (d[0] + u * (d[1] + u * d[2])); };
+    double best = ratio(u0);
+    arg = u0;
+    auto offer = [&](double u) {
+      const double v = ratio(u);
+      if (v > best) {
+        best = v;
+        arg = u;
+      }
+    };
+    offer(u1);
+    const double k2 = n[2] * d[1] - n[1] * d[2], k1 = n[2] * d[0] - n[0] * d[2], k0 = n[1] * d[0] - n[0] * d[1];
+    const double lo = std::min(u0, u1), hi = std::max(u0, u1);
+    auto root = [&](double u) {
+      if (u > lo && u < hi) offer(u);
+    };
+    if (k2 == 0) {
+      if (k1 != 0) root(-k0 / (2 * k1));
+    } else {
+      const double disc = k1 * k1 - k2 * k0;
+      if (disc >= 0) {
+        // The stable pair of formulas (no cancellation between -k1 and the square root).
+        const double r = -(k1 + std::copysign(std::sqrt(disc), k1));
+        root(r / k2);
+        if (r != 0) root(k0 / r);
+      }
+    }
+    return best;
+  }
+
+  // Side zone: the maximum of psi along one monotone arc (its ends attained by the caller) in
+  // closed form, as edge_maximum's along a segment. The gap to F is affine in u or in w, so
+  // psi = N / D with D = (R + E u)(alpha + beta u) or alpha (R + E u) - beta (P + Q u) for
+  // gap = alpha + beta v, v = u or w. Where the gap is positive at both ends (it is monotone
+  // along the arc) psi is smooth on the arc and rational_max gives its supremum, attained,
+  // instead of a search whose boxes close only linearly. Returns false, leaving the arc to
+  // the search, where the gap vanishes at an end (the arc reaches F's edge, where S = T makes
   // psi tend to a limit) or the arc is a point.
   bool side_arc(const Piece& p, const Bilinear& f, const std::array<double, 4>& e) {
     if (!(piece_distance(p.x(e[0]), p.y(e[1])) > 0) || !(piece_distance(p.x(e[2]), p.y(e[3])) > 0)) return false;
-    const bool along_s = std::abs(e[2] - e[0]) >= std::abs(e[3] - e[1]);
-    const double ua = along_s ? e[0] : e[1], ub = along_s ? e[2] : e[3];
-    const double wa = along_s ? e[1] : e[0], wb = along_s ? e[3] : e[2];
-    if (ua == ub) return false;
-    // S = c + g u + (h + e u) w and f = P + Q u + R w + E u w.
-    const double g = along_s ? p.a : p.b, h = along_s ? p.b : p.a;
-    const double fp = f.a, fq = along_s ? f.b : f.c, fr = along_s ? f.c : f.b, fe = f.e;
-    const double c0 = p.c - top_;
-    const double n0 = c0 * fr - h * fp, n1 = c0 * fe + g * fr - h * fq - p.e * fp, n2 = g * fe - p.e * fq;
+    const ArcForm a = arc_form(p, f, e);
+    if (a.u0 == a.u1) return false;
     // The gap z (v / 2 + origin - edge) = alpha + beta v, v the local coordinate across F's
     // edge (s beside F's left or right side, t above or below it).
     const bool beside_x = zy_ == 0;
     const double z = beside_x ? zx_ : zy_;
     const double edge = beside_x ? (zx_ > 0 ? f_.x1 : f_.x0) : (zy_ > 0 ? f_.y1 : f_.y0);
     const double alpha = z * ((beside_x ? p.x0 : p.y0) - edge), beta = 0.5 * z;
-    double q0, q1, q2;
-    if (beside_x == along_s) {  // the gap is affine in u: D = (R + E u)(alpha + beta u)
-      q0 = fr * alpha;
-      q1 = fr * beta + fe * alpha;
-      q2 = fe * beta;
-    } else {  // affine in w: D = alpha (R + E u) - beta (P + Q u)
-      q0 = alpha * fr - beta * fp;
-      q1 = alpha * fe - beta * fq;
-      q2 = 0;
-    }
-    // N' D - N D' = k2 u^2 + 2 k1 u + k0.
-    const double k2 = n2 * q1 - n1 * q2, k1 = n2 * q0 - n0 * q2, k0 = n1 * q0 - n0 * q1;
-    std::array<double, 2> roots{};
-    int count = 0;
-    if (k2 == 0) {
-      if (k1 != 0) roots[static_cast<size_t>(count++)] = -k0 / (2 * k1);
-    } else {
-      const double disc = k1 * k1 - k2 * k0;
-      if (disc >= 0) {
-        // The stable pair of formulas (no cancellation between -k1 and the root).
-        const double r = -(k1 + std::copysign(std::sqrt(disc), k1));
-        roots[static_cast<size_t>(count++)] = r / k2;
-        if (r != 0) roots[static_cast<size_t>(count++)] = k0 / r;
+    const std::array<double, 3> d = beside_x == a.along_s
+                                        ? std::array<double, 3>{a.fr * alpha, a.fr * beta + a.fe * alpha, a.fe * beta}
+                                        : std::array<double, 3>{alpha * a.fr - beta * a.fp, alpha * a.fe - beta * a.fq, 0.0};
+    double arg;
+    rational_max(a.n, d, a.u0, a.u1, arg);
+    attain_on(p, a, arg);
+    return true;
+  }
+
+  // corner_upper over the box of the arc's points at u0 and u1, which holds the arc between
+  // them (it is monotone). Out of line: corner_arc's fallback, almost never taken.
+  [[gnu::noinline]] double arc_box_upper(const Piece& p, const ArcForm& a, double u0, double u1) const {
+    const double w0 = a.w(u0), w1 = a.w(u1);
+    const double s0 = a.along_s ? u0 : w0, s1 = a.along_s ? u1 : w1, t0 = a.along_s ? w0 : u0, t1 = a.along_s ? w1 : u1;
+    const double bs0 = std::min(s0, s1), bs1 = std::max(s0, s1), bt0 = std::min(t0, t1), bt1 = std::max(t0, t1);
+    return corner_upper(p, bs0, bt0, bs1, bt1, {p.value(bs0, bt0), p.value(bs1, bt0), p.value(bs0, bt1), p.value(bs1, bt1)});
+  }
+
+  // Corner zone: a branch and bound along one monotone arc over intervals of u, whose bound
+  // closes quadratically. For a unit vector v into the zone's quadrant, dist(y, F) = |y - c|
+  // >= v . (y - c) > 0 (Cauchy-Schwarz; both in the quadrant, y != c), so where S >= T
+  // psi <= (S - T) / (v . (y - c)) = N / D, with D = (R + E u) v . (y - c) a quadratic in u
+  // (the offset along u is affine in u, the one along w times R + E u too), whose maximum
+  // over the interval rational_max gives; where S < T, psi < 0 <= level. With v the
+  // direction to the arc's point in the middle of the interval the bound exceeds the
+  // supremum by a factor 1 / cos(angle), second order in the interval's angular size, where
+  // a box's bound is first order: most arcs settle in a few intervals. The maximiser of the
+  // bound is offered as a point of the arc. Returns false, leaving the arc to the box search,
+  // where an end is at c (a piece touching c, where psi may tend to a limit) or the arc is a
+  // point.
+  bool corner_arc(const Piece& p, const Bilinear& f, const std::array<double, 4>& e) {
+    if (!(piece_distance(p.x(e[0]), p.y(e[1])) > 0) || !(piece_distance(p.x(e[2]), p.y(e[3])) > 0)) return false;
+    const ArcForm a = arc_form(p, f, e);
+    if (a.u0 == a.u1) return false;
+    // The offsets from c into the quadrant: along u, a0 + a1 u; along w, (b0 + b1 u) / (R + E u).
+    const double zu = a.along_s ? zx_ : zy_, zw = a.along_s ? zy_ : zx_;
+    const double a0 = zu * (a.along_s ? p.x0 - cx_ : p.y0 - cy_), a1 = 0.5 * zu;
+    const double ow = zw * (a.along_s ? p.y0 - cy_ : p.x0 - cx_);
+    const double b0 = ow * a.fr - 0.5 * zw * a.fp, b1 = ow * a.fe - 0.5 * zw * a.fq;
+    const double m_sign = a.fr + a.fe * 0.5 * (a.u0 + a.u1) > 0 ? 1.0 : -1.0;  // R + E u's sign on the branch
+    struct Span {
+      double u0, u1;
+      int depth;
+    };
+    // Depth first, the half holding the bound's maximiser first: one pending half per level.
+    std::array<Span, kArcDepth + 2> stack;
+    int top = 0;
+    stack[static_cast<size_t>(top++)] = {a.u0, a.u1, 0};
+    while (top > 0) {
+      const Span sp = stack[static_cast<size_t>(--top)];
+      const double um = 0.5 * (sp.u0 + sp.u1);
+      const double ou = std::max(a0 + a1 * um, 0.0), ov = std::max((b0 + b1 * um) / (a.fr + a.fe * um), 0.0);
+      const double len = length(ou, ov);
+      const double vu = ou / len, vw = ov / len;
+      const std::array<double, 3> d = {vu * a0 * a.fr + vw * b0, vu * (a0 * a.fe + a1 * a.fr) + vw * b1, vu * a1 * a.fe};
+      // D must keep R + E u's sign (v . (y - c) > 0) over the interval: its ends and vertex.
+      auto positive = [&](double u) { return m_sign * (d[0] + u * (d[1] + u * d[2])) > 0; };
+      bool valid = len > 0 && positive(sp.u0) && positive(sp.u1);
+      if (valid && d[2] != 0) {
+        const double vertex = -d[1] / (2 * d[2]);
+        if (vertex > std::min(sp.u0, sp.u1) && vertex < std::max(sp.u0, sp.u1)) valid = positive(vertex);
       }
-    }
-    const double ulo = std::min(ua, ub), uhi = std::max(ua, ub), wlo = std::min(wa, wb), whi = std::max(wa, wb);
-    for (int k = 0; k < count; ++k) {
-      const double u = roots[static_cast<size_t>(k)];
-      if (!(u > ulo && u < uhi)) continue;
-      const double w = std::clamp(-(fp + fq * u) / (fr + fe * u), wlo, whi);
-      if (along_s) {
-        attain_closure(p, u, w);
+      double upper, arg = um;
+      if (valid) {
+        upper = std::max(rational_max(a.n, d, sp.u0, sp.u1, arg), 0.0);
       } else {
-        attain_closure(p, w, u);
+        upper = arc_box_upper(p, a, sp.u0, sp.u1);  // rounding near an axis through c
       }
+      attain_on(p, a, arg);
+      if (upper <= level()) continue;
+      if (upper <= std::max(psi * (1 + tol_), bound) || sp.depth >= kArcDepth) {
+        bound = std::max(bound, upper);
+        continue;
+      }
+      const Span lower{sp.u0, um, sp.depth + 1}, upper_half{um, sp.u1, sp.depth + 1};
+      const bool arg_in_lower = (arg - um) * (sp.u0 - um) > 0;
+      stack[static_cast<size_t>(top++)] = arg_in_lower ? upper_half : lower;
+      stack[static_cast<size_t>(top++)] = arg_in_lower ? lower : upper_half;
     }
     return true;
   }
 
-  // Branch and bound along one monotone arc of f = 0 between (arc[0], arc[1]) and (arc[2],
-  // arc[3]): the arc lies in the box of its ends, whose bound (side_upper / corner_upper)
-  // holds for it; boxes are halved along the arc until the bound is within the tolerance
-  // of a value attained on the arc.
+  // Along one monotone arc of f = 0 between (arc[0], arc[1]) and (arc[2], arc[3]): in closed
+  // form beside F (side_arc), by intervals of the arc's parameter off its corner (corner_arc),
+  // and where those decline (an end on F's boundary) by boxes: the arc lies in the box of
+  // its ends, whose bound (side_upper / corner_upper) holds for it; boxes are halved along
+  // the arc until the bound is within the tolerance of a value attained on the arc.
   void search_arc(const Piece& p, const Bilinear& f, const std::array<double, 4>& whole) {
     attain_closure(p, whole[0], whole[1]);
     attain_closure(p, whole[2], whole[3]);
-    if ((zx_ == 0 || zy_ == 0) && side_arc(p, f, whole)) return;
+    if (zx_ == 0 || zy_ == 0 ? side_arc(p, f, whole) : corner_arc(p, f, whole)) return;
     struct Arc {
       std::array<double, 4> e;
       int depth;
@@ -946,7 +1049,9 @@ bool rises_away(const float* box, const Rect& r, const Rect& f) {
 double plane_excess(const float* plane, const Rect& r, const Rect& f, double top, double psi) {
   const double a = plane[0] - top, gx = plane[1], gy = plane[2];
   const double ncx = 0.5 * (r.x0 + r.x1), ncy = 0.5 * (r.y0 + r.y1);
-  auto h = [&](double x, double y) {
+  // Inlined (up to 16 copies): left to GCC, the choice flips with the size of unrelated code
+  // in this file, and the call cost 13 % more instructions in the plane tests.
+  auto h = [&](double x, double y) __attribute__((always_inline)) {
     return a + gx * (x - ncx) + gy * (y - ncy) - psi * length(gap(f.x0, f.x1, x, x), gap(f.y0, f.y1, y, y));
   };
   // Corners first: a positive one settles it (the caller only asks whether it is <= 0), the
