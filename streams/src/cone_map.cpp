@@ -83,8 +83,13 @@ HalfGrid half_grid(const HeightField& f) {
 struct Piece {
   double x0 = 0, y0 = 0, c = 0, a = 0, b = 0, e = 0;
   double top = 0;  // the largest corner value: S's maximum on the piece (a bilinear's is at a corner)
+  // value() at the corners (0, 0), (1, 0), (0, 1), (1, 1), as refine() reads them: computed
+  // once per piece here, not by each texel that searches it (2 % of the instructions).
+  std::array<double, 4> corner{};
   Piece(double px, double py, double v00, double v10, double v01, double v11)
-      : x0(px), y0(py), c(v00), a(v10 - v00), b(v01 - v00), e(v00 - v10 - v01 + v11), top(std::max(std::max(v00, v10), std::max(v01, v11))) {}
+      : x0(px), y0(py), c(v00), a(v10 - v00), b(v01 - v00), e(v00 - v10 - v01 + v11), top(std::max(std::max(v00, v10), std::max(v01, v11))) {
+    corner = {value(0, 0), value(1, 0), value(0, 1), value(1, 1)};
+  }
   double value(double s, double t) const { return c + a * s + b * t + e * s * t; }
   double gx(double t) const { return 2.0 * (a + e * t); }  // dS/dx, per pixel
   double gy(double s) const { return 2.0 * (b + e * s); }
@@ -133,19 +138,24 @@ class ConeSearch {
     zx_ = p.x0 >= f_.x1 ? 1 : (px1 <= f_.x0 ? -1 : 0);
     zy_ = p.y0 >= f_.y1 ? 1 : (py1 <= f_.y0 ? -1 : 0);
     if (zx_ == 0 && zy_ == 0) return;  // inside F, where S <= T
-    const std::array<double, 4> v = {p.value(0, 0), p.value(1, 0), p.value(0, 1), p.value(1, 1)};
+    const std::array<double, 4>& v = p.corner;
+    // refine()'s first tests, which end most pieces, here without its call, which then
+    // starts after them (settle()).
+    double upper = 0;
     if (zx_ == 0 || zy_ == 0) {
-      // refine()'s first test, which ends most pieces, here without its call: the exact
-      // supremum over a side piece.
-      if (side_upper(p, 0, 0, 1, 1, v) <= level()) return;
+      // The exact supremum over a side piece (<= 0 when no corner is above T).
+      upper = side_upper(p, 0, 0, 1, 1, v);
+      if (upper <= level()) return;
     } else {
       // Corner zone: the nearest point of F is its corner c.
       cx_ = zx_ > 0 ? f_.x1 : f_.x0;
       cy_ = zy_ > 0 ? f_.y1 : f_.y0;
-      // refine()'s first test here too, before the corner's setup (a piece that touches c, at
-      // distance 0, goes on: it may hold the limit at c).
+      // Before the corner's setup too (a piece that touches c, at distance 0, goes on unless
+      // no corner is above T: it may hold the limit at c).
+      const double vmax = std::max(std::max(v[0], v[1]), std::max(v[2], v[3]));
+      if (vmax <= top_) return;
       const double near = nearest(p, 0, 0, 1, 1);
-      if (near > 0 && std::max(std::max(v[0], v[1]), std::max(v[2], v[3])) - top_ <= level() * near) return;
+      if (near > 0 && vmax - top_ <= level() * near) return;
       // The piece touches c when one of its corners is c (local coordinates sc, tc).
       touches_ = (cx_ == p.x0 || cx_ == px1) && (cy_ == p.y0 || cy_ == py1);
       sc_ = 2 * (cx_ - p.x0);
@@ -162,7 +172,7 @@ class ConeSearch {
       boundary_max_ = !(p.value(sc_, tc_) < top_ && p.e * zx_ * zy_ < 0);
     }
     if (zx_ != 0 && zy_ != 0 && touches_ && p.value(sc_, tc_) >= top_) attain_corner_limit(p);
-    refine(p, 0, 0, 1, 1, v, 0xf, 0);
+    settle(p, 0, 0, 1, 1, v, 0xf, 0, upper);
   }
 
  private:
@@ -311,24 +321,36 @@ class ConeSearch {
   // evaluated them already (the same calls, so the same values). fresh: the corners not yet
   // offered to attain(); a point offered again cannot raise psi, which only grows.
   void refine(const Piece& p, double s0, double t0, double s1, double t1, const std::array<double, 4>& v, unsigned fresh, int depth) {
-    const std::array<double, 4> ss = {s0, s1, s0, s1}, ts = {t0, t0, t1, t1};
     double vmax = -kInf;
     for (int k = 0; k < 4; ++k) vmax = std::max(vmax, v[k]);  // a bilinear function's maximum is at a corner
     if (vmax <= top_) return;
-
+    // First the cheapest bound, which ends most rectangles: beside F the exact supremum, off
+    // its corner the plain bound (max S - T) / (nearest distance).
     double upper = 0;
+    if (zx_ == 0 || zy_ == 0) {
+      upper = side_upper(p, s0, t0, s1, t1, v);
+      if (upper <= level()) return;
+    } else {
+      if (vmax - top_ <= level() * nearest(p, s0, t0, s1, t1)) return;
+    }
+    settle(p, s0, t0, s1, t1, v, fresh, depth, upper);
+  }
+
+  // refine() after its first bound has not dismissed the rectangle (`upper`: that bound
+  // beside F, unused off its corner). piece() enters here for a whole piece, having made the
+  // same tests.
+  void settle(const Piece& p, double s0, double t0, double s1, double t1, const std::array<double, 4>& v, unsigned fresh, int depth,
+              double upper) {
+    const std::array<double, 4> ss = {s0, s1, s0, s1}, ts = {t0, t0, t1, t1};
     // Relaxed cones, where psi has no interior maximum: a rectangle that the edge of the
     // descending set crosses is settled exactly (crossed()) once its bound over every point
     // has not closed.
     bool exact_crossing = false;
     // (The descent tests after the cheapest bound, which ends more rectangles for less.)
     if (zx_ == 0 || zy_ == 0) {
-      upper = side_upper(p, s0, t0, s1, t1, v);
-      if (upper <= level() || (relaxed_ && never_descends(p, s0, t0, s1, t1))) return;
+      if (relaxed_ && never_descends(p, s0, t0, s1, t1)) return;
       exact_crossing = relaxed_ && !descends_throughout(p, s0, t0, s1, t1);
     } else {
-      // First the plain bound (max S - T) / (nearest distance): most pieces end here.
-      if (vmax - top_ <= level() * nearest(p, s0, t0, s1, t1)) return;
       // Then one bound over every point (the direction to the rectangle's centre, see
       // corner_upper, which starts with it), cheaper than the descent tests and the eight
       // evaluations below when it settles the rectangle.
