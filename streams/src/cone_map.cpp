@@ -1197,19 +1197,6 @@ constexpr Mask kColumn = [] {
 constexpr Mask kRow = (Mask{1} << kBlock) - 1;
 // Per column (or row) of a block, a squared gap.
 using Gaps = std::array<double, kBlock>;
-// The squared gaps from the block's columns (rows) [t0 + c, t0 + c + 1] to [a0, a1]:
-// gap() = max(t0 + c - a1, a0 - t0 - c - 1, 0), the same values (all are whole numbers,
-// exact in double) from two differences.
-inline Gaps squared_gaps(int t0, double a0, double a1) {
-  const double after = t0 - a1, before = a0 - t0 - 1.0;
-  Gaps g;
-  for (size_t c = 0; c < kBlock; ++c) {
-    const double gp = std::max(std::max(after + static_cast<double>(c), before - static_cast<double>(c)), 0.0);
-    g[c] = gp * gp;
-  }
-  return g;
-}
-
 // The block's texels two at a time, texels k and k + 1 (k even: half a row), in one SSE2
 // register on x86-64 (a GCC/Clang vector extension: plain scalar code elsewhere).
 typedef double Pair __attribute__((vector_size(16)));
@@ -1219,12 +1206,30 @@ inline Pair load_pair(const double* p) {
   std::memcpy(&v, p, sizeof v);
   return v;
 }
-inline Pair positive_part(Pair a) {
+// max(a, b) per texel (where they differ only in the sign of a zero the results square alike).
+inline Pair pair_max(Pair a, Pair b) {
 #if defined(__SSE2__)
-  return _mm_max_pd(a, _mm_setzero_pd());
+  return _mm_max_pd(a, b);
 #else
-  return a > Pair{0.0, 0.0} ? a : Pair{0.0, 0.0};
+  return a > b ? a : b;
 #endif
+}
+inline Pair positive_part(Pair a) { return pair_max(a, Pair{0.0, 0.0}); }
+
+// The squared gaps from the block's columns (rows) [t0 + c, t0 + c + 1] to [a0, a1]:
+// gap() = max(t0 + c - a1, a0 - t0 - c - 1, 0), the same values (all are whole numbers,
+// exact in double) from two differences, two columns at a time (the scalar loop was 3 % of
+// the instructions: every child of every node walked needs two of these).
+inline Gaps squared_gaps(int t0, double a0, double a1) {
+  const double after = t0 - a1, before = a0 - t0 - 1.0;
+  Gaps g;
+  for (size_t c = 0; c < kBlock; c += 2) {
+    const Pair k = {static_cast<double>(c), static_cast<double>(c + 1)};
+    const Pair gp = positive_part(pair_max(after + k, before - k));
+    const Pair sq = gp * gp;
+    std::memcpy(&g[c], &sq, sizeof sq);
+  }
+  return g;
 }
 // a < b per texel: bit 0 the pair's first texel, bit 1 its second.
 inline Mask less_bits(Pair a, Pair b) {
