@@ -208,11 +208,14 @@ class ConeSearch {
   // bilinear in y (see never_descends), so negative at the rectangle's corners means
   // negative throughout.
   bool descends_throughout(const Piece& p, double s0, double t0, double s1, double t1) const {
+    // The rectangle's corners' gradients and positions, once for F's four corners.
+    const double gx[2] = {p.gx(t0), p.gx(t1)}, gy[2] = {p.gy(s0), p.gy(s1)};
+    const double x[2] = {p.x(s0), p.x(s1)}, y[2] = {p.y(t0), p.y(t1)};
     for (double fx : {f_.x0, f_.x1})
       for (double fy : {f_.y0, f_.y1}) {
         bool all = true;
-        for (double s : {s0, s1})
-          for (double t : {t0, t1}) all = all && p.gx(t) * (p.x(s) - fx) + p.gy(s) * (p.y(t) - fy) < 0;
+        for (int i = 0; i < 2; ++i)
+          for (int j = 0; j < 2; ++j) all = all && gx[j] * (x[i] - fx) + gy[i] * (y[j] - fy) < 0;
         if (all) return true;
       }
     return false;
