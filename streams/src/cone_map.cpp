@@ -86,6 +86,7 @@ struct Piece {
   // value() at the corners (0, 0), (1, 0), (0, 1), (1, 1), as refine() reads them: computed
   // once per piece here, not by each texel that searches it (2 % of the instructions).
   std::array<double, 4> corner{};
+  Piece() = default;
   Piece(double px, double py, double v00, double v10, double v01, double v11)
       : x0(px), y0(py), c(v00), a(v10 - v00), b(v01 - v00), e(v00 - v10 - v01 + v11), top(std::max(std::max(v00, v10), std::max(v01, v11))) {
     corner = {value(0, 0), value(1, 0), value(0, 1), value(1, 1)};
@@ -1312,6 +1313,7 @@ class BlockSearch {
     // give each texel a slope close to its answer before the walk (its steepest point is
     // most often next to it), so that the walk's tests dismiss more. The walk then skips them.
     near_ = true;
+    around_built_ = 0;
     for (Mask q = live_; q != 0; q &= q - 1) {
       const int k = low_bit(q);
       const size_t uk = static_cast<size_t>(k);
@@ -1321,8 +1323,7 @@ class BlockSearch {
         if (x < 0 || y < 0 || x >= w_ || y >= h_ || !(tree_.at(0, x, y) > top[uk]) || !(s[uk].psi < cap[uk])) continue;
         if (relaxed && rises_away(leaves_.box(x, y), Rect{static_cast<double>(x), static_cast<double>(y), x + 1.0, y + 1.0}, footprint_[uk])) continue;
         if ((dx == 0 || dy == 0) && s[uk].side_texel_settles(grid_, x, y, 0, 0)) continue;  // a side neighbour whole
-        for (int bb = 2 * y; bb <= 2 * y + 1; ++bb)
-          for (int a = 2 * x; a <= 2 * x + 1; ++a) s[uk].piece(piece(0, 0, a, bb));
+        for (const Piece& p : around_pieces(b, x, y)) s[uk].piece(p);
       }
       if (!(s[uk].psi < cap[uk])) live_ &= ~(Mask{1} << k);
     }
@@ -1553,6 +1554,19 @@ class BlockSearch {
     }
   }
 
+  // The four pieces of texel (x, y), next to block b (within one texel of it), built once
+  // per block: most are a neighbour of two of the block's texels or more (bricks at 256²:
+  // -0.5 % instructions conservative, -0.8 % relaxed).
+  const std::array<Piece, 4>& around_pieces(const Block& b, int x, int y) {
+    const int slot = (y - b.j0 + 1) * (kBlock + 2) + (x - b.i0 + 1);
+    std::array<Piece, 4>& ps = around_[static_cast<size_t>(slot)];
+    if (((around_built_ >> slot) & 1) == 0) {
+      ps = {piece(0, 0, 2 * x, 2 * y), piece(0, 0, 2 * x + 1, 2 * y), piece(0, 0, 2 * x, 2 * y + 1), piece(0, 0, 2 * x + 1, 2 * y + 1)};
+      around_built_ |= uint64_t{1} << slot;
+    }
+    return ps;
+  }
+
   Piece piece(double ox, double oy, int a, int b) const {
     return Piece(ox + 0.5 * a, oy + 0.5 * b, grid_.at(a, b), grid_.at(a + 1, b), grid_.at(a, b + 1), grid_.at(a + 1, b + 1));
   }
@@ -1568,6 +1582,10 @@ class BlockSearch {
   bool relaxed_ = false;
   bool near_ = false;  // visiting the map itself (not a copy): the neighbourhoods are searched
   Mask live_ = 0;  // texels still searching (psi below their cap)
+  // around_pieces()'s pieces of the (kBlock + 2)^2 texels around the block, and which are built.
+  std::array<std::array<Piece, 4>, (kBlock + 2) * (kBlock + 2)> around_{};
+  uint64_t around_built_ = 0;
+  static_assert((kBlock + 2) * (kBlock + 2) <= 64, "one bit per texel around a block");
   bool conceded_ = false;  // a plane test of the node being searched has raised a bound
   std::array<Rect, kBlock * kBlock> footprint_{};
   std::vector<Node> stack_;
