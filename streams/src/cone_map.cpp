@@ -1219,6 +1219,13 @@ inline Pair pair_max(Pair a, Pair b) {
 #endif
 }
 inline Pair positive_part(Pair a) { return pair_max(a, Pair{0.0, 0.0}); }
+inline Pair pair_min(Pair a, Pair b) {
+#if defined(__SSE2__)
+  return _mm_min_pd(a, b);
+#else
+  return a < b ? a : b;
+#endif
+}
 
 // The squared gaps from the block's columns (rows) [t0 + c, t0 + c + 1] to [a0, a1]:
 // gap() = max(t0 + c - a1, a0 - t0 - c - 1, 0), the same values (all are whole numbers,
@@ -1400,21 +1407,30 @@ class BlockSearch {
   // Relaxed cones: drop the texels that see no point of r descend. Once for the block first
   // (no point descends as seen from F_B: then from no F_p inside it either).
   // Per texel the term along x depends on its column only, the one along y on its row: each
-  // is computed once (rises_away's verdict, bit for bit).
+  // is computed once, two columns (rows) at a time, and the texels' sums two at a time
+  // (rises_away's verdict, bit for bit: where a minimum picks the other of two equal
+  // products, they differ at most in the sign of a zero, which no sum's sign depends on).
   Mask rising(const float* box, const Rect& r, const Block& b, Mask keep) const {
     if ((keep & (keep - 1)) != 0 && rises_away(box, r, b.f)) return 0;
-    std::array<double, kBlock> along_x, along_y;
-    unsigned have_x = 0, have_y = 0;
-    for (Mask q = keep; q != 0; q &= q - 1) {
-      const int k = low_bit(q), c = k & (kBlock - 1), rr = k >> kBlockLog;
-      const size_t uc = static_cast<size_t>(c), ur = static_cast<size_t>(rr);
-      if (((have_x >> c) & 1) == 0) along_x[uc] = lowest_term(box[0], box[1], r.x0, r.x1, b.i0 + c, b.i0 + c + 1.0);
-      if (((have_y >> rr) & 1) == 0) along_y[ur] = lowest_term(box[2], box[3], r.y0, r.y1, b.j0 + rr, b.j0 + rr + 1.0);
-      have_x |= 1u << c;
-      have_y |= 1u << rr;
-      if (!(along_x[uc] + along_y[ur] < 0)) keep &= ~(Mask{1} << k);
+    const std::array<double, kBlock> along_x = lowest_terms(box[0], box[1], r.x0, r.x1, b.i0),
+                                     along_y = lowest_terms(box[2], box[3], r.y0, r.y1, b.j0);
+    Mask out = 0;
+    for (Mask pairs = (keep | keep >> 1) & 0x55555555u; pairs != 0; pairs &= pairs - 1) {
+      const size_t k = static_cast<size_t>(low_bit(pairs));
+      out |= less_bits(load_pair(&along_x[k & (kBlock - 1)]) + along_y[k >> kBlockLog], Pair{0.0, 0.0}) << k;
     }
-    return keep;
+    return out & keep;
+  }
+  // lowest_term() for the block's columns (rows) [t0 + c, t0 + c + 1], c = 0 .. kBlock - 1.
+  static std::array<double, kBlock> lowest_terms(double g0, double g1, double r0, double r1, int t0) {
+    std::array<double, kBlock> out;
+    for (size_t c = 0; c < kBlock; c += 2) {
+      const Pair f0 = {static_cast<double>(t0 + static_cast<int>(c)), static_cast<double>(t0 + static_cast<int>(c) + 1)};
+      const Pair d0 = r0 - (f0 + 1.0), d1 = r1 - f0;
+      const Pair low = pair_min(pair_min(g0 * d0, g0 * d1), pair_min(g1 * d0, g1 * d1));
+      std::memcpy(&out[c], &low, sizeof low);
+    }
+    return out;
   }
 
   // Depth-first over one copy of the map shifted by (ox, oy) pixels, nearest child (to the
