@@ -1275,6 +1275,33 @@ Mask steeper(double m, const Gaps& gx2, const Gaps& gy2, const std::array<double
   return out & keep;
 }
 
+// steeper() for the four children of a node at once: child u = 2 uy + ux has maximum km[u]
+// and squared gaps gx2[ux] (per column of the block) and gy2[uy] (per row). Pair by pair of
+// texels, whose apexes, levels and gaps are loaded once for the four (one child after the
+// other cost 2.5 % more instructions on the bricks, a loop over the four 1 % more); the same
+// IEEE operations per texel, so the same verdicts.
+inline std::array<Mask, 4> children_steeper(const std::array<double, 4>& km, const std::array<Gaps, 2>& gx2, const std::array<Gaps, 2>& gy2,
+                                            const std::array<double, kBlock * kBlock>& top,
+                                            const std::array<double, kBlock * kBlock>& level2, Mask keep) {
+  Mask m0 = 0, m1 = 0, m2 = 0, m3 = 0;
+  for (Mask pairs = (keep | keep >> 1) & 0x55555555u; pairs != 0; pairs &= pairs - 1) {
+    const size_t k = static_cast<size_t>(low_bit(pairs));
+    const Pair t = load_pair(&top[k]), l2 = load_pair(&level2[k]);
+    const size_t c = k & (kBlock - 1), r = k >> kBlockLog;
+    const Pair x0 = load_pair(&gx2[0][c]), x1 = load_pair(&gx2[1][c]);
+    const double y0 = gy2[0][r], y1 = gy2[1][r];
+    auto test = [&](double m, Pair gx, double gy) {
+      const Pair e = positive_part(m - t);
+      return less_bits(l2 * (gx + gy), e * e) << k;
+    };
+    m0 |= test(km[0], x0, y0);
+    m1 |= test(km[1], x1, y0);
+    m2 |= test(km[2], x0, y1);
+    m3 |= test(km[3], x1, y1);
+  }
+  return {m0 & keep, m1 & keep, m2 & keep, m3 & keep};
+}
+
 // steeper()'s `apart` for texels all kept: those of `keep` with d^2 >= size2.
 inline Mask apart_bits(const Gaps& gx2, const Gaps& gy2, Mask keep, double size2) {
   Mask out = 0;
@@ -1531,8 +1558,8 @@ class BlockSearch {
       const int cs = 1 << l, kw = tree_.w[static_cast<size_t>(l)], kh = tree_.h[static_cast<size_t>(l)];
       const float* kid_max = tree_.level[static_cast<size_t>(l)].data();
       const int cx0 = 2 * n.x, cx1 = std::min(2 * n.x + 1, kw - 1), cy0 = 2 * n.y, cy1 = std::min(2 * n.y + 1, kh - 1);
-      std::array<Gaps, 2> kgx2, kgy2;
-      std::array<double, 2> bgx, bgy;  // gaps to the block's footprint
+      std::array<Gaps, 2> kgx2{}, kgy2{};
+      std::array<double, 2> bgx{}, bgy{};  // gaps to the block's footprint
       // Along one axis: the squared gaps from each of the block's texel columns (rows) to
       // the children's cells k0..k1 (origin o, cells cs wide, clipped at `extent`), and the
       // gap from the block's footprint [f0, f1].
@@ -1547,15 +1574,18 @@ class BlockSearch {
       };
       axis_gaps(cx0, cx1, ox, static_cast<double>(w_), b.i0, b.f.x0, b.f.x1, kgx2, bgx);
       axis_gaps(cy0, cy1, oy, static_cast<double>(h_), b.j0, b.f.y0, b.f.y1, kgy2, bgy);
-      for (int cy = cy0; cy <= cy1; ++cy)
-        for (int cx = cx0; cx <= cx1; ++cx) {
-          const float km = kid_max[static_cast<size_t>(cy) * static_cast<size_t>(kw) + static_cast<size_t>(cx)];
-          Mask unused = 0;
-          const Mask kid = steeper<false>(km, kgx2[static_cast<size_t>(cx - cx0)], kgy2[static_cast<size_t>(cy - cy0)], top, level2, keep, kInf, unused);
-          if (kid != 0) {
-            const size_t ux = static_cast<size_t>(cx - cx0), uy = static_cast<size_t>(cy - cy0);
-            kids[static_cast<size_t>(count++)] = Node{l, cx, cy, km, kid, length(bgx[ux], bgy[uy]), kgx2[ux], kgy2[uy]};
-          }
+      // Child u = 2 uy + ux; one beyond the map's edge gets the maximum -inf, which no texel keeps.
+      std::array<double, 4> km;
+      for (size_t u = 0; u < 4; ++u) {
+        const int cx = cx0 + static_cast<int>(u & 1), cy = cy0 + static_cast<int>(u >> 1);
+        km[u] = cx <= cx1 && cy <= cy1 ? kid_max[static_cast<size_t>(cy) * static_cast<size_t>(kw) + static_cast<size_t>(cx)] : -kInf;
+      }
+      const std::array<Mask, 4> kid = children_steeper(km, kgx2, kgy2, top, level2, keep);
+      for (size_t u = 0; u < 4; ++u)
+        if (kid[u] != 0) {
+          const size_t ux = u & 1, uy = u >> 1;
+          kids[static_cast<size_t>(count++)] = Node{l, cx0 + static_cast<int>(ux), cy0 + static_cast<int>(uy), static_cast<float>(km[u]), kid[u],
+                                                    length(bgx[ux], bgy[uy]), kgx2[ux], kgy2[uy]};
         }
       // Farthest pushed first, the nearest searched next (insertion sort of <= 4, of
       // indices: a node is 96 bytes).
