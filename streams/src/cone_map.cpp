@@ -514,6 +514,7 @@ class ConeSearch {
   [[gnu::noinline]] bool crossed(const Piece& p, double s0, double t0, double s1, double t1) {
     std::array<Bilinear, 4> fk{};
     std::array<std::array<double, 4>, 4> fv{};
+    std::array<Arcs, 4> ends;
     int n = 0;
     // dS/dx is affine in t and dS/dy in s: the ends decide their signs over R.
     const double gx0 = p.gx(t0), gx1 = p.gx(t1), gy0 = p.gy(s0), gy1 = p.gy(s1);
@@ -529,7 +530,7 @@ class ConeSearch {
         const std::array<double, 4> f = {q.at(s0, t0), q.at(s1, t0), q.at(s0, t1), q.at(s1, t1)};
         if (!(std::min({f[0], f[1], f[2], f[3]}) < 0)) continue;  // D_k misses R (f_k bilinear: corners decide)
         // The arcs first: a degenerate curve leaves the rectangle to the caller untouched.
-        if (!arcs(q, f, s0, t0, s1, t1, nullptr)) return false;
+        if (!arcs(q, f, s0, t0, s1, t1, ends[static_cast<size_t>(n)])) return false;
         fk[static_cast<size_t>(n)] = q;
         fv[static_cast<size_t>(n++)] = f;
       }
@@ -540,7 +541,8 @@ class ConeSearch {
       edge_part(p, t1, s0, s1, f[2], f[3], true);
       edge_part(p, s0, t0, t1, f[0], f[2], false);
       edge_part(p, s1, t0, t1, f[1], f[3], false);
-      arcs(q, f, s0, t0, s1, t1, &p);
+      const Arcs& a = ends[static_cast<size_t>(k)];
+      for (int i = 0; i < a.count; ++i) search_arc(p, q, a.ends[static_cast<size_t>(i)]);
     }
     return true;
   }
@@ -564,10 +566,16 @@ class ConeSearch {
     if (zx_ != 0 && zy_ != 0 && b > a) edge_maximum(p, fixed, a, b, along_x);
   }
 
-  // The arcs of f = 0 inside [s0, s1] x [t0, t1] (f's corner values in fc): with p null,
-  // only whether they are well formed (each branch crosses the boundary twice); with p,
-  // each arc searched for psi's maximum.
-  bool arcs(const Bilinear& f, const std::array<double, 4>& fc, double s0, double t0, double s1, double t1, const Piece* p) {
+  // The arcs of f = 0 inside [s0, s1] x [t0, t1] (f's corner values in fc), each by its ends
+  // (s, t, s, t), one per branch of the curve.
+  struct Arcs {
+    int count = 0;
+    std::array<std::array<double, 4>, 2> ends;
+  };
+  // Returns false where they are not well formed (a branch that does not cross the
+  // boundary exactly twice).
+  bool arcs(const Bilinear& f, const std::array<double, 4>& fc, double s0, double t0, double s1, double t1, Arcs& out) const {
+    out.count = 0;
     // Where f = 0 on the boundary: sign changes along the edges, and corners where f = 0.
     std::array<std::array<double, 2>, 8> at{};
     int count = 0;
@@ -607,7 +615,6 @@ class ConeSearch {
       (sgn > 0 ? plus : minus) += 1;
     }
     if (count > 4 || (minus != 0 && minus != 2) || (plus != 0 && plus != 2)) return false;
-    if (p == nullptr) return true;
     for (int sgn : {-1, 1}) {
       std::array<double, 4> arc{};
       int got = 0;
@@ -617,7 +624,7 @@ class ConeSearch {
           arc[static_cast<size_t>(2 * got + 1)] = at[static_cast<size_t>(k)][1];
           ++got;
         }
-      if (got == 2) search_arc(*p, f, arc);
+      if (got == 2) out.ends[static_cast<size_t>(out.count++)] = arc;
     }
     return true;
   }
