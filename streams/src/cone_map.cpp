@@ -1543,9 +1543,17 @@ class BlockSearch {
           const size_t k = static_cast<size_t>(low_bit(q));
           if (r.x0 == footprint_[k].x0 || r.y0 == footprint_[k].y0) whole |= Mask{1} << k;
         }
-        if (!relaxed_) apart &= ~whole;
-        if (relaxed_) keep = rising(leaves_.box(n.x, n.y), r, b, keep);
-        if ((apart & keep) != 0) keep = planes(leaves_.plane(n.x, n.y), r, top, s, keep, apart & keep);
+        // Relaxed cones test no plane at a leaf: after the gradient box, their pieces' own
+        // first bounds cost less than the plane tests they would spare (without them, 256²:
+        // bricks -2.9 % instructions, noise -1.4 %, bumps -2.2 %). Conservative cones keep
+        // them: without them the bricks took 2.4 % fewer instructions but the smooth bumps 13 %
+        // more (there the surface hugs the cone and the pieces' bounds close late).
+        if (relaxed_) {
+          keep = rising(leaves_.box(n.x, n.y), r, b, keep);
+        } else {
+          apart &= ~whole;
+          if (apart != 0) keep = planes(leaves_.plane(n.x, n.y), r, top, s, keep, apart);
+        }
         if (keep == 0) continue;
         std::array<Piece, 4> pieces = {piece(ox, oy, 2 * n.x, 2 * n.y), piece(ox, oy, 2 * n.x + 1, 2 * n.y), piece(ox, oy, 2 * n.x, 2 * n.y + 1),
                                        piece(ox, oy, 2 * n.x + 1, 2 * n.y + 1)};
