@@ -39,8 +39,9 @@
 // pieces are exact on their boundary (closed-form maxima along the edges) unless the piece's
 // polynomial is concave along the rays out of F's corner, where they are refined until the
 // bound is within `tolerance` (relative) of a value attained. For relaxed cones, a piece the
-// edge of the descending set crosses is settled on that edge (arcs of a hyperbola, searched
-// in one dimension to the tolerance) and on the piece's edges.
+// edge of the descending set crosses is settled on that edge (arcs of a hyperbola: beside F
+// in closed form, off its corner searched in one dimension to the tolerance) and on the
+// piece's edges.
 // The stored ratio is always <= the exact one (safe) and, except where noted below, >= exact /
 // (1 + tolerance). Relaxed cones may keep a looser bound (still safe) where no exact treatment
 // applies: where the apex height is reached on F's boundary and the descending set fans out of
