@@ -6,6 +6,7 @@
 #include "meso/meshreduce/meshreduce.hpp"
 #include "meso/streams/cone_map.hpp"
 #include "meso/streams/distance_field.hpp"
+#include "meso/streams/dilation_erosion.hpp"
 #include "meso/streams/pyramid.hpp"
 #include "meso/uvpack/uv_check.hpp"
 
@@ -72,6 +73,20 @@ void BM_MinMaxPyramid(benchmark::State& state) {
       benchmark::Counter(static_cast<double>(state.iterations()) * n * n, benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_MinMaxPyramid)->Arg(2048)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// Dilation/erosion maps: the footprint min-max of level 0 plus the running min/max, whose
+// cost does not depend on the radius (args: size, radius).
+void BM_DilationErosion(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const HeightField f = brick_height_field(n);
+  for (auto _ : state) {
+    const Image m = dilation_erosion_map(f, static_cast<int>(state.range(1)));
+    benchmark::DoNotOptimize(m.pixels.data());
+  }
+  state.counters["texels/s"] =
+      benchmark::Counter(static_cast<double>(state.iterations()) * n * n, benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_DilationErosion)->Args({2048, 0})->Args({2048, 4})->Args({2048, 64})->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_DistanceField(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));

@@ -206,6 +206,7 @@ TEST(Cli, BadInputExitsThreeWithOneLineNamingTheFileAndNoOutput) {
        "fan.obj"},
       {"streams pyramid " + (dir / "nan.exr").string() + " -o " + (dir / "o.png").string(), "nan.exr"},
       {"streams relaxed-cone " + (dir / "nan.exr").string() + " -o " + (dir / "o.png").string(), "nan.exr"},
+      {"streams dilate-erode " + (dir / "nan.exr").string() + " -o " + (dir / "o.png").string() + " --radius 1", "nan.exr"},
   };
   for (const auto& c : cases) {
     const Result r = run(c.args);
@@ -375,6 +376,36 @@ TEST_F(Skeleton, WholePipeline) {
   EXPECT_EQ(levels.back().at(0, 0, 0), 0.0f) << "normalised minimum";
   EXPECT_EQ(levels.back().at(0, 0, 1), 1.0f) << "normalised maximum";
   EXPECT_EQ(nlohmann::json::parse(pyramid.out)["levels"], 8);
+
+  // Dilation and erosion maps: radius 0 is the pyramid's level 0; radius 2 bounds every
+  // level-0 footprint of its 5 x 5 window (the border: clamp, the default).
+  for (const int radius : {0, 2}) {
+    const fs::path de = d / ("de" + std::to_string(radius) + ".exr");
+    const Result r = run("streams dilate-erode " + (d / "maps" / "displacement.exr").string() + " -o " + de.string() +
+                         " --radius " + std::to_string(radius) + " --json");
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(nlohmann::json::parse(r.out)["radius"], radius);
+    const Image m = read_image(de);
+    ASSERT_EQ(m.channels, 2);
+    for (int y = 0; y < 64; ++y)
+      for (int x = 0; x < 128; ++x) {
+        if (radius == 0) {
+          ASSERT_EQ(m.at(x, y, 0), levels[0].at(x, y, 0));
+          ASSERT_EQ(m.at(x, y, 1), levels[0].at(x, y, 1));
+          continue;
+        }
+        float lo = 2, hi = -1;
+        for (int j = std::max(0, y - 2); j <= std::min(63, y + 2); ++j)
+          for (int i = std::max(0, x - 2); i <= std::min(127, x + 2); ++i) {
+            lo = std::min(lo, levels[0].at(i, j, 0));
+            hi = std::max(hi, levels[0].at(i, j, 1));
+          }
+        ASSERT_EQ(m.at(x, y, 0), lo) << x << "," << y;
+        ASSERT_EQ(m.at(x, y, 1), hi) << x << "," << y;
+      }
+  }
+  EXPECT_EQ(run("streams dilate-erode " + (d / "maps" / "displacement.exr").string() + " -o " + (d / "x.exr").string()).code, 2)
+      << "--radius is required";
 
   // Cone maps of the baked displacement: the MIP chain of the pyramid's sizes, apexes equal
   // to the pyramid's footprint maxima, ratios finite, relaxed never narrower, coarse levels

@@ -4,6 +4,7 @@
 #include "meso/formats/atomic_file.hpp"
 #include "meso/formats/image_io.hpp"
 #include "meso/streams/cone_map.hpp"
+#include "meso/streams/dilation_erosion.hpp"
 #include "meso/streams/distance_field.hpp"
 #include "meso/streams/pyramid.hpp"
 #include "meso/streams/vdm.hpp"
@@ -73,6 +74,40 @@ void add_streams(CLI::App& app, Context& ctx) {
                    for (const Image& l : p.levels) n += l.pixels.size();
                    return n * (args->half ? 2 : 4);
                  }()},
+                {"scale", field.scale},
+                {"bias", field.bias},
+                {"border", border_name(field.border)}};
+      return 0;
+    };
+  });
+
+  auto de_args = std::make_shared<StreamArgs>();
+  auto de_radius = std::make_shared<int>(0);
+  CLI::App* de = add_stream_subcommand(
+      streams, "dilate-erode", "Dilation and erosion maps (Kolb & Rezk-Salama): max and min of the bilinear height surface around each texel",
+      "Output EXR (R = erosion: minimum, G = dilation: maximum over the (2 radius + 1)^2 texels around)", *de_args);
+  de->add_option("--radius", *de_radius, "Half-width of the square neighbourhood, in texels (0: the texel's own footprint)")
+      ->required()
+      ->check(CLI::Range(0, 1 << 20));
+  de->callback([&ctx, de_args, de_radius] {
+    ctx.run = [&ctx, de_args, de_radius](nlohmann::json& report, Progress&) {
+      const HeightField field = load_height_field(*de_args);
+      Image m = dilation_erosion_map(field, *de_radius);
+      m.metadata = height_field_metadata(field);
+      m.metadata["quantity"] = std::string("dilation-erosion");
+      m.metadata["channels"] = std::string("R = erosion (minimum), G = dilation (maximum) of the bilinear height surface over the neighbourhood");
+      m.metadata["radius_texels"] = *de_radius;
+      OutputSet outputs;
+      write_image(m, outputs.add(de_args->output), de_args->half ? PixelFormat::half : PixelFormat::float32);
+      outputs.commit();
+      info(ctx.globals, "wrote " + de_args->output);
+      report = {{"command", "streams dilate-erode"},
+                {"input", de_args->input},
+                {"output", de_args->output},
+                {"width", m.width},
+                {"height", m.height},
+                {"radius", *de_radius},
+                {"bytes", m.pixels.size() * (de_args->half ? 2 : 4)},
                 {"scale", field.scale},
                 {"bias", field.bias},
                 {"border", border_name(field.border)}};

@@ -1,0 +1,109 @@
+#include "meso/streams/dilation_erosion.hpp"
+
+#include "meso/streams/pyramid.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <stdexcept>
+#include <vector>
+
+namespace meso {
+
+namespace {
+
+// The running extreme of a window of `radius` either side over a line of n values read with
+// get(i) (0 <= i < n), written with put(i, value): van Herk / Gil-Werman, three comparisons
+// per value whatever the radius. Under wrap the line is periodic (a window wider than the
+// line covers all of it); under clamp the window is cut at the ends. `better(a, b)`: a wins.
+template <class Get, class Put, class Better>
+void running_extreme(int n, int radius, bool wrap, Get get, Put put, Better better, std::vector<float>& scratch) {
+  const int w = 2 * radius + 1;
+  if (w >= n) {
+    // The window always holds the whole line (wrap), or reaches past both ends from where
+    // it is cut (clamp): a prefix/suffix scan covers both.
+    if (wrap) {
+      float all = get(0);
+      for (int i = 1; i < n; ++i) all = better(get(i), all) ? get(i) : all;
+      for (int i = 0; i < n; ++i) put(i, all);
+      return;
+    }
+  }
+  // Values over the padded line: index j in [0, n + 2 radius) is line position j - radius,
+  // wrapped or (clamp) a neutral value that never wins: the window is cut there.
+  const int m = n + 2 * radius;
+  const int blocks = (m + w - 1) / w;
+  const int padded = blocks * w;
+  scratch.resize(3 * static_cast<size_t>(padded));
+  float* v = scratch.data();
+  float* prefix = v + padded;
+  float* suffix = prefix + padded;
+  bool have_neutral = false;
+  float neutral = 0;
+  for (int j = 0; j < padded; ++j) {
+    int i = j - radius;
+    if (i >= 0 && i < n) {
+      v[j] = get(i);
+    } else if (wrap) {
+      i %= n;
+      if (i < 0) i += n;
+      v[j] = get(i);
+    } else {
+      // Clamp: outside the map. The line's own worst value never beats anything in it.
+      if (!have_neutral) {
+        neutral = get(0);
+        for (int k = 1; k < n; ++k) neutral = better(neutral, get(k)) ? get(k) : neutral;
+        have_neutral = true;
+      }
+      v[j] = neutral;
+    }
+  }
+  for (int b = 0; b < blocks; ++b) {
+    const int s = b * w;
+    prefix[s] = v[s];
+    for (int j = s + 1; j < s + w; ++j) prefix[j] = better(v[j], prefix[j - 1]) ? v[j] : prefix[j - 1];
+    suffix[s + w - 1] = v[s + w - 1];
+    for (int j = s + w - 2; j >= s; --j) suffix[j] = better(v[j], suffix[j + 1]) ? v[j] : suffix[j + 1];
+  }
+  // The window of line position i is padded [i, i + w - 1]: the suffix of its first block
+  // and the prefix of its last.
+  for (int i = 0; i < n; ++i) {
+    const float a = suffix[i], b = prefix[i + w - 1];
+    put(i, better(a, b) ? a : b);
+  }
+}
+
+}  // namespace
+
+Image dilation_erosion_map(const HeightField& field, int radius) {
+  if (radius < 0) throw std::invalid_argument("dilation_erosion_map: negative radius");
+  Image out = footprint_min_max(field);  // channel 0 min, 1 max over each texel's footprint
+  if (radius == 0) return out;
+  const int width = out.width, height = out.height;
+  const bool wrap = field.border == Border::wrap;
+  auto lower = [](float a, float b) { return a < b; };
+  auto higher = [](float a, float b) { return a > b; };
+  Image rows = out;
+  tbb::parallel_for(tbb::blocked_range<int>(0, height, 16), [&](const tbb::blocked_range<int>& r) {
+    std::vector<float> scratch;
+    for (int y = r.begin(); y < r.end(); ++y)
+      for (int c = 0; c < 2; ++c) {
+        running_extreme(
+            width, radius, wrap, [&](int x) { return out.at(x, y, c); }, [&](int x, float value) { rows.at(x, y, c) = value; },
+            [&](float a, float b) { return c == 0 ? lower(a, b) : higher(a, b); }, scratch);
+      }
+  });
+  tbb::parallel_for(tbb::blocked_range<int>(0, width, 16), [&](const tbb::blocked_range<int>& r) {
+    std::vector<float> scratch;
+    for (int x = r.begin(); x < r.end(); ++x)
+      for (int c = 0; c < 2; ++c) {
+        running_extreme(
+            height, radius, wrap, [&](int y) { return rows.at(x, y, c); }, [&](int y, float value) { out.at(x, y, c) = value; },
+            [&](float a, float b) { return c == 0 ? lower(a, b) : higher(a, b); }, scratch);
+      }
+  });
+  return out;
+}
+
+}  // namespace meso
