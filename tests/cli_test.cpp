@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <fstream>
 
 namespace meso {
@@ -216,6 +217,26 @@ TEST(Cli, BadInputExitsThreeWithOneLineNamingTheFileAndNoOutput) {
     EXPECT_FALSE(fs::exists(out));
     EXPECT_FALSE(fs::exists(dir / "o.png"));
     EXPECT_TRUE(!fs::exists(dir / "maps") || fs::is_empty(dir / "maps")) << "no partial bake output";
+  }
+}
+
+// A height map with non-finite texels: every stream exits 3 with one line naming the file and
+// the first bad texel in row order (meso's writer refuses NaN, so the map holds infinities,
+// which take the same path as NaN: formats/src/image_io_oiio.cpp), and writes nothing.
+TEST(Cli, StreamsNameTheFirstNonFiniteTexel) {
+  test::TempDir dir;
+  Image bad(8, 6, 1, 0.5f);
+  bad.at(5, 4) = -std::numeric_limits<float>::infinity();
+  bad.at(2, 3) = std::numeric_limits<float>::infinity();  // first in row order: row 3 before row 4
+  write_image(bad, dir / "inf.exr", PixelFormat::float32);
+  for (const std::string stream : {"pyramid", "cone", "relaxed-cone", "sdf", "dilate-erode --radius 1"}) {
+    const Result r = run("streams " + stream.substr(0, stream.find(' ')) + " " + (dir / "inf.exr").string() + " -o " +
+                         (dir / "o.exr").string() + (stream.find(' ') == std::string::npos ? "" : stream.substr(stream.find(' '))));
+    EXPECT_EQ(r.code, 3) << stream << "\n" << r.err;
+    EXPECT_EQ(lines(r.err), 1u) << r.err;
+    EXPECT_NE(r.err.find("inf.exr"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("infinite sample at texel (2, 3)"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "o.exr"));
   }
 }
 
