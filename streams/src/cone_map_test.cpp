@@ -136,7 +136,12 @@ INSTANTIATE_TEST_SUITE_P(
                                          BruteCase{"steps", [] { return steps(16, 14); }, 8, 0},
                                          BruteCase{"bumps", [] { return bumps(16, 16, Border::clamp); }, 8, 0},
                                          BruteCase{"noise_wrap", [] { return noise(10, 8, Border::wrap, 3); }, 4, 2},
-                                         BruteCase{"bumps_wrap", [] { return bumps(12, 12, Border::wrap); }, 4, 2}),
+                                         BruteCase{"bumps_wrap", [] { return bumps(12, 12, Border::wrap); }, 4, 2},
+                                         // The 32² sizes, sampled more coarsely away from F.
+                                         BruteCase{"noise32", [] { return noise(32, 32, Border::clamp, 5); }, 4, 0},
+                                         BruteCase{"spike32", [] { return field_from(32, 32, Border::clamp, [](int x, int y) {
+                                                     return x == 13 && y == 18 ? 1.0f : 0.0f;
+                                                   }); }, 4, 0}),
                        ::testing::Values(ConeKind::conservative, ConeKind::relaxed)),
     [](const auto& param_info) {
       return std::string(std::get<0>(param_info.param).name) + "_" + cone_kind_name(std::get<1>(param_info.param));
