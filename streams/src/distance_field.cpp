@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 namespace meso {
 
@@ -97,9 +98,12 @@ DistanceField build_distance_field(const HeightField& field, const DistanceField
   return df;
 }
 
-Image distance_field_image(const DistanceField& field, const HeightField& source) {
-  Image img(field.width, field.height * field.depth, 1);
-  img.pixels.assign(field.distance.begin(), field.distance.end());
+Image distance_field_image(DistanceField field, const HeightField& source) {
+  Image img;
+  img.width = field.width;
+  img.height = field.height * field.depth;
+  img.channels = 1;
+  img.pixels = std::move(field.distance);  // the same layout: no copy
   img.metadata = height_field_metadata(source);
   img.metadata["quantity"] = std::string("distance field");
   img.metadata["channels"] = std::string("Y = distance from the voxel centre to the solid under the filtered height surface, units of u");

@@ -43,7 +43,8 @@ DistanceField build_distance_field(const HeightField& field, const DistanceField
 
 // The field as one image, as `meso streams sdf` writes it: width W, height H * D, slice k in
 // rows [k H, (k+1) H), slice 0 the lowest, one channel; metadata: the height field's
-// (height_field_metadata) plus depth, relief, quantity, channels, layout.
-Image distance_field_image(const DistanceField& field, const HeightField& source);
+// (height_field_metadata) plus depth, relief, quantity, channels, layout. Takes the field's
+// buffer (the layout is the same): pass std::move(field) to avoid a copy of it.
+Image distance_field_image(DistanceField field, const HeightField& source);
 
 }  // namespace meso
