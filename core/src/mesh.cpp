@@ -107,6 +107,15 @@ bool is_uv_seam(const Mesh& mesh, Mesh::EdgeHandle e) {
   return !same_uv(mesh, h0, mesh.prev_halfedge_handle(h1)) || !same_uv(mesh, h1, mesh.prev_halfedge_handle(h0));
 }
 
+std::vector<uint8_t> uv_seam_vertices(const Mesh& mesh) {
+  std::vector<uint8_t> seam(mesh.n_vertices(), 0);
+  if (!has_uvs(mesh)) return seam;
+  for (auto e : mesh.edges())
+    if (is_uv_seam(mesh, e))
+      for (unsigned k = 0; k < 2; ++k) seam[static_cast<size_t>(mesh.to_vertex_handle(mesh.halfedge_handle(e, k)).idx())] = 1;
+  return seam;
+}
+
 float uv_double_area(const Mesh& mesh, FaceHandle f) {
   const auto hs = face_halfedges(mesh, f);
   const Vec2f a = mesh.texcoord2D(hs[0]), b = mesh.texcoord2D(hs[1]), c = mesh.texcoord2D(hs[2]);

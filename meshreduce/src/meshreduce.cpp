@@ -84,19 +84,10 @@ std::vector<uint8_t> group_vertices(const Mesh& mesh, const std::vector<std::str
 // ones. Vertices on UV seams move: a seam vertex is one position shared by the faces on both
 // sides, each corner keeping its own UV, so a move neither tears nor folds a chart; the seam
 // moves with the surface as interior vertices do, tethered to within seam_tolerance of where
-// the reduction left it, on the input's seam (seam_vertices; untethered, a 100-face torus's
+// the reduction left it, on the input's seam (uv_seam_vertices; untethered, a 100-face torus's
 // seam vertices moved 4.6 % of the diagonal off it). Held fixed they kept the seamed torus at
 // 1.21x and 1.33x the best peer's Hausdorff distance at 1 % and 0.1 % (free: 0.94x and
 // 1.08x; docs/benchmarks.md).
-std::vector<uint8_t> seam_vertices(const Mesh& mesh) {
-  std::vector<uint8_t> seam(mesh.n_vertices(), 0);
-  if (has_uvs(mesh))
-    for (auto e : mesh.edges())
-      if (is_uv_seam(mesh, e))
-        for (unsigned k = 0; k < 2; ++k) seam[static_cast<size_t>(mesh.to_vertex_handle(mesh.halfedge_handle(e, k)).idx())] = 1;
-  return seam;
-}
-
 std::vector<uint8_t> fit_fixed_vertices(const Mesh& mesh, const ReduceOptions& options) {
   std::vector<uint8_t> fixed = boundary_vertices(mesh);
   if (!options.lock_groups.empty()) {
@@ -236,7 +227,7 @@ Mesh reduce_mesh(const Mesh& input, const ReduceOptions& options, ReduceReport* 
     fitted[k] = outputs[k];
     reduce::SurfaceFitOptions fo;
     fo.max_aspect_ratio = options.max_aspect_ratio;
-    fo.tethered = seam_vertices(fitted[k]);
+    fo.tethered = uv_seam_vertices(fitted[k]);
     fo.tether = static_cast<double>(options.seam_tolerance) * static_cast<double>(bounding_box(input).diagonal());
     reduce::fit_to_surface(fitted[k], *target, fit_fixed_vertices(fitted[k], options), fo);
     fit_distance[k] = reference->measure(fitted[k]);

@@ -782,18 +782,14 @@ TEST(MeshReduce, BestFitMovesSeamVerticesWithinTheSeamTolerance) {
     const Mesh unfitted = reduce_mesh(high, plain);
     ASSERT_EQ(unfitted.n_vertices(), low.n_vertices());
     size_t seam_vertices = 0, moved = 0;
-    std::vector<uint8_t> done(low.n_vertices(), 0);
-    for (auto e : low.edges()) {
-      if (!is_uv_seam(low, e)) continue;
-      for (unsigned k = 0; k < 2; ++k) {
-        const auto v = low.to_vertex_handle(low.halfedge_handle(e, k));
-        if (done[static_cast<size_t>(v.idx())]++) continue;
-        double d = std::numeric_limits<double>::infinity();
-        for (const auto& [a, b] : seams) d = std::min(d, reduce::point_segment_distance(reduce::point(low.point(v)), a, b));
-        EXPECT_LE(d, static_cast<double>(o.seam_tolerance) * diagonal) << faces << " faces: seam vertex " << v.idx();
-        ++seam_vertices;
-        moved += !(low.point(v) == unfitted.point(v));
-      }
+    const std::vector<uint8_t> seam = uv_seam_vertices(low);
+    for (auto v : low.vertices()) {
+      if (!seam[static_cast<size_t>(v.idx())]) continue;
+      double d = std::numeric_limits<double>::infinity();
+      for (const auto& [a, b] : seams) d = std::min(d, reduce::point_segment_distance(reduce::point(low.point(v)), a, b));
+      EXPECT_LE(d, static_cast<double>(o.seam_tolerance) * diagonal) << faces << " faces: seam vertex " << v.idx();
+      ++seam_vertices;
+      moved += !(low.point(v) == unfitted.point(v));
     }
     EXPECT_GT(seam_vertices, 0u);
     EXPECT_GT(moved, seam_vertices / 2) << faces << " faces: the fit moved " << moved << " of " << seam_vertices << " seam vertices";

@@ -77,10 +77,7 @@ TEST(SurfaceFit, FreeSeamVerticesKeepTheirUvsAndBringTheSeamsCloser) {
   ReduceOptions o;
   o.target_faces = 400;
   const Mesh low = reduce_mesh(high, o);
-  std::vector<uint8_t> seam(low.n_vertices(), 0);
-  for (auto e : low.edges())
-    if (is_uv_seam(low, e))
-      for (int k = 0; k < 2; ++k) seam[static_cast<size_t>(low.to_vertex_handle(low.halfedge_handle(e, static_cast<unsigned>(k))).idx())] = 1;
+  const std::vector<uint8_t> seam = uv_seam_vertices(low);
   ASSERT_GT(std::count(seam.begin(), seam.end(), 1), 20) << "the torus has seams along both wrap lines";
   const reduce::SurfaceFitTarget target(high);
   Mesh held = low, free = low;

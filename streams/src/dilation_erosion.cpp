@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 namespace meso {
@@ -20,15 +21,13 @@ namespace {
 template <class Get, class Put, class Better>
 void running_extreme(int n, int radius, bool wrap, Get get, Put put, Better better, std::vector<float>& scratch) {
   const int w = 2 * radius + 1;
-  if (w >= n) {
-    // The window always holds the whole line (wrap), or reaches past both ends from where
-    // it is cut (clamp): a prefix/suffix scan covers both.
-    if (wrap) {
-      float all = get(0);
-      for (int i = 1; i < n; ++i) all = better(get(i), all) ? get(i) : all;
-      for (int i = 0; i < n; ++i) put(i, all);
-      return;
-    }
+  if (wrap && w >= n) {
+    // The window always holds the whole periodic line. (Under clamp a window wider than the
+    // line is cut at both ends: the general case below, with neutral padding.)
+    float all = get(0);
+    for (int i = 1; i < n; ++i) all = better(get(i), all) ? get(i) : all;
+    for (int i = 0; i < n; ++i) put(i, all);
+    return;
   }
   // Values over the padded line: index j in [0, n + 2 radius) is line position j - radius,
   // wrapped or (clamp) a neutral value that never wins: the window is cut there.
@@ -82,27 +81,26 @@ Image dilation_erosion_map(const HeightField& field, int radius) {
   if (radius == 0) return out;
   const int width = out.width, height = out.height;
   const bool wrap = field.border == Border::wrap;
-  auto lower = [](float a, float b) { return a < b; };
-  auto higher = [](float a, float b) { return a > b; };
+  // Channel 0 keeps the lower value, channel 1 the higher.
+  auto better = [](int c) { return [c](float a, float b) { return c == 0 ? a < b : a > b; }; };
+  // One pass of running extremes along every line: rows (along x) from `out` into `rows`,
+  // then columns (along y) from `rows` back into `out`; the separable filter of a square.
   Image rows = out;
-  tbb::parallel_for(tbb::blocked_range<int>(0, height, 16), [&](const tbb::blocked_range<int>& r) {
-    std::vector<float> scratch;
-    for (int y = r.begin(); y < r.end(); ++y)
-      for (int c = 0; c < 2; ++c) {
-        running_extreme(
-            width, radius, wrap, [&](int x) { return out.at(x, y, c); }, [&](int x, float value) { rows.at(x, y, c) = value; },
-            [&](float a, float b) { return c == 0 ? lower(a, b) : higher(a, b); }, scratch);
-      }
-  });
-  tbb::parallel_for(tbb::blocked_range<int>(0, width, 16), [&](const tbb::blocked_range<int>& r) {
-    std::vector<float> scratch;
-    for (int x = r.begin(); x < r.end(); ++x)
-      for (int c = 0; c < 2; ++c) {
-        running_extreme(
-            height, radius, wrap, [&](int y) { return rows.at(x, y, c); }, [&](int y, float value) { out.at(x, y, c) = value; },
-            [&](float a, float b) { return c == 0 ? lower(a, b) : higher(a, b); }, scratch);
-      }
-  });
+  auto pass = [&](bool along_x, const Image& from, Image& to) {
+    const int lines = along_x ? height : width, length = along_x ? width : height;
+    tbb::parallel_for(tbb::blocked_range<int>(0, lines, 16), [&](const tbb::blocked_range<int>& r) {
+      std::vector<float> scratch;
+      for (int l = r.begin(); l < r.end(); ++l)
+        for (int c = 0; c < 2; ++c) {
+          auto at = [&](int i) { return along_x ? std::pair{i, l} : std::pair{l, i}; };
+          running_extreme(
+              length, radius, wrap, [&](int i) { const auto [x, y] = at(i); return from.at(x, y, c); },
+              [&](int i, float value) { const auto [x, y] = at(i); to.at(x, y, c) = value; }, better(c), scratch);
+        }
+    });
+  };
+  pass(true, out, rows);
+  pass(false, rows, out);
   return out;
 }
 

@@ -77,6 +77,9 @@ inline bool same_uv(const Mesh& mesh, HalfedgeHandle a, HalfedgeHandle b) {
 // edges are not seams (they have one side).
 bool is_uv_seam(const Mesh& mesh, Mesh::EdgeHandle e);
 
+// Per vertex, 1 where the vertex ends a UV seam edge (is_uv_seam), else 0; all 0 without UVs.
+std::vector<uint8_t> uv_seam_vertices(const Mesh& mesh);
+
 // Charts: faces connected through edges whose two sides carry the same UVs. Returns a chart
 // index per face, numbered by first face in face order; `count` receives the number.
 std::vector<int> uv_charts(const Mesh& mesh, size_t* count = nullptr);
