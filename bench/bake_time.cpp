@@ -5,8 +5,9 @@
 //
 // Prints one JSON object: the best and the median of REPEATS (default 3) runs of bake() at
 // SIZE x SIZE with 1 sample and the default maps (displacement, tangent- and object-space
-// normals, coverage and the dilation are all part of bake()), texels, rays/s (2 rays per
-// covered texel), and the median process CPU time per call (user + system, all threads, in
+// normals, coverage and the dilation are all part of bake()), texels, the Embree queries the
+// last call cast ("rays", as `meso bake --json` counts them: each intersect, occluded and
+// multi-hit collect is one) and rays/s at the median time, and the median process CPU time per call (user + system, all threads, in
 // seconds: on a machine shared with other jobs it moves less than the wall time, which
 // waits for the cores). Threads: TBB's default (limit it with taskset, as the script does,
 // or run on a machine of that size). "output_hash" is a 64-bit FNV-1a hash of the last
@@ -61,6 +62,7 @@ int main(int argc, char** argv) {
     const int repeats = argc > 6 ? std::max(1, std::atoi(argv[6])) : 3;
     std::vector<double> seconds, cpu;
     size_t covered = 0, hits = 0;
+    uint64_t rays = 0;
     uint64_t hash = 0xcbf29ce484222325ULL;
     for (int i = 0; i < repeats; ++i) {
       const double c0 = process_cpu_seconds();
@@ -70,6 +72,7 @@ int main(int argc, char** argv) {
       cpu.push_back(process_cpu_seconds() - c0);
       covered = r.covered_texels;
       hits = r.hits;
+      rays = r.rays;
       if (i + 1 == repeats) {
         for (const meso::Image* m : {&r.displacement, &r.normal_ts, &r.normal_os, &r.coverage}) fnv1a(hash, m->pixels.data(), m->pixels.size() * sizeof(float));
         for (const size_t n : {r.covered_texels, r.hits, r.misses, r.ambiguous}) fnv1a(hash, &n, sizeof n);
@@ -78,10 +81,10 @@ int main(int argc, char** argv) {
     }
     std::sort(seconds.begin(), seconds.end());
     std::sort(cpu.begin(), cpu.end());
-    std::printf("{\"size\": %d, \"low_faces\": %zu, \"high_faces\": %zu, \"covered_texels\": %zu, \"hits\": %zu, \"repeats\": %d, "
+    std::printf("{\"size\": %d, \"low_faces\": %zu, \"high_faces\": %zu, \"covered_texels\": %zu, \"hits\": %zu, \"rays\": %llu, \"repeats\": %d, "
                 "\"best_seconds\": %.4f, \"median_seconds\": %.4f, \"median_cpu_seconds\": %.4f, \"rays_per_second\": %.4g, \"output_hash\": \"%016llx\"}\n",
-                o.width, low.n_faces(), high.n_faces(), covered, hits, repeats, seconds.front(), seconds[seconds.size() / 2], cpu[cpu.size() / 2],
-                2.0 * static_cast<double>(covered) / seconds[seconds.size() / 2], static_cast<unsigned long long>(hash));
+                o.width, low.n_faces(), high.n_faces(), covered, hits, static_cast<unsigned long long>(rays), repeats, seconds.front(), seconds[seconds.size() / 2], cpu[cpu.size() / 2],
+                static_cast<double>(rays) / seconds[seconds.size() / 2], static_cast<unsigned long long>(hash));
   } catch (const meso::Error& e) {
     std::fprintf(stderr, "bake_time: %s\n", e.what());
     return static_cast<int>(e.code());

@@ -11,6 +11,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -44,6 +45,8 @@ class RayScene {
         for (size_t k = 0; k < 3; ++k) arrays_.triangles[3 * f + k] = static_cast<uint32_t>(mesh.to_vertex_handle(hs[k]).idx());
       }
     });
+    if (!deleted) pair_triangles(mesh);
+    else single_quads();
     device_ = rtcNewDevice(nullptr);
     if (!device_) throw InternalError("Embree: cannot create a device");
     scene_ = rtcNewScene(device_);
@@ -53,11 +56,11 @@ class RayScene {
     filters_ = rtcGetDeviceProperty(device_, RTC_DEVICE_PROPERTY_FILTER_FUNCTION_SUPPORTED) != 0;
     rtcSetSceneFlags(scene_, filters_ ? RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION : RTC_SCENE_FLAG_ROBUST);
     rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
-    RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
+    RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_QUAD);
     rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, arrays_.positions.data(), 0,
                                3 * sizeof(float), arrays_.vertex_count());
-    rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, arrays_.triangles.data(), 0,
-                               3 * sizeof(uint32_t), arrays_.triangle_count());
+    rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT4, quads_.data(), 0,
+                               4 * sizeof(uint32_t), quads_.size() / 4);
     rtcCommitGeometry(geom);
     rtcAttachGeometry(scene_, geom);
     rtcReleaseGeometry(geom);
@@ -100,9 +103,7 @@ class RayScene {
     Hit h;
     if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) {
       h.t = rh.ray.tfar;
-      h.prim = rh.hit.primID;
-      h.u = rh.hit.u;
-      h.v = rh.hit.v;
+      to_triangle(rh.hit.primID, rh.hit.u, rh.hit.v, h.prim, h.u, h.v);
     }
     return h;
   }
@@ -135,6 +136,7 @@ class RayScene {
     CollectContext cc;
     rtcInitIntersectContext(&cc.ctx);
     cc.ctx.filter = &CollectContext::filter;
+    cc.scene = this;
     cc.out = &out;
     cc.window = window;
     cc.cap = tfar;
@@ -144,6 +146,8 @@ class RayScene {
     rtcIntersect1(scene_, &cc.ctx, &rh);
     return !out.overflow;
   }
+  // Embree primitives: the mesh's triangles paired into quads (see Pair).
+  size_t quad_count() const { return pairs_.size(); }
   // Whether collect() can run (else it returns false at once, casting nothing).
   bool filters() const { return filters_; }
   const MeshArrays& arrays() const { return arrays_; }
@@ -170,6 +174,7 @@ class RayScene {
   // accepting filter: "intersection filters may modify tfar value".)
   struct CollectContext {
     RTCIntersectContext ctx;  // first: Embree passes &ctx
+    const RayScene* scene = nullptr;
     Candidates* out = nullptr;
     float window = 0, cap = 0;
     static void filter(const RTCFilterFunctionNArguments* args) {
@@ -181,9 +186,8 @@ class RayScene {
         if (c.n < kMaxCandidates) {
           Candidate& h = c.hit[c.n++];
           h.t = t;
-          h.prim = RTCHitN_primID(args->hit, args->N, i);
-          h.u = RTCHitN_u(args->hit, args->N, i);
-          h.v = RTCHitN_v(args->hit, args->N, i);
+          self->scene->to_triangle(RTCHitN_primID(args->hit, args->N, i), RTCHitN_u(args->hit, args->N, i),
+                                   RTCHitN_v(args->hit, args->N, i), h.prim, h.u, h.v);
         } else {
           c.overflow = true;
         }
@@ -193,7 +197,128 @@ class RayScene {
     }
   };
 
+  // Triangles paired into quads (Embree's quad leaves hold twice the triangles of its
+  // triangle leaves, and the BVH over half the primitives is shallower and builds faster).
+  // Quad q = (v0, v1, v2, v3) is Embree's pair of triangles (v0, v1, v3) and (v2, v3, v1),
+  // the mesh's triangles pair_[q].tri[0] and tri[1] (tri[1] = tri[0] for a triangle left
+  // single, stored as (v0, v1, v2, v2): its second triangle is degenerate, never hit).
+  // rot[k]: the position, in the triangle's stored corner order, of the quad corner its
+  // weights start from (v0 for the first triangle, v2 for the second).
+  struct Pair {
+    uint32_t tri[2];
+    uint8_t rot[2];
+  };
+  // Embree's hit on quad q at (u, v) as the triangle's hit: its index and its barycentrics
+  // (1 - u - v) t0 + u t1 + v t2 over its stored corners. Embree's quad coordinates span
+  // the quad: (0,0) = v0, (1,0) = v1, (1,1) = v2, (0,1) = v3; u + v <= 1 on the first
+  // triangle, where p = v0 + u (v1 - v0) + v (v3 - v0), and on the second
+  // p = v2 + (1 - u)(v3 - v2) + (1 - v)(v1 - v2). On the diagonal both give the same point.
+  void to_triangle(uint32_t q, float u, float v, uint32_t& prim, float& tu, float& tv) const {
+    const Pair& p = pairs_[q];
+    float w[3];  // weights of the triangle's corners, from its quad start corner on
+    int k;
+    if (u + v <= 1.0f || p.tri[1] == p.tri[0]) {
+      k = 0;
+      w[0] = 1.0f - u - v;
+      w[1] = u;
+      w[2] = v;
+    } else {
+      k = 1;
+      w[0] = u + v - 1.0f;
+      w[1] = 1.0f - u;
+      w[2] = 1.0f - v;
+    }
+    prim = p.tri[k];
+    const int r = p.rot[k];
+    // Stored corner c has weight w[(c - r) mod 3].
+    tu = w[(4 - r) % 3];
+    tv = w[(5 - r) % 3];
+  }
+  void single_quads() {
+    const size_t nt = arrays_.triangle_count();
+    quads_.resize(4 * nt);
+    pairs_.resize(nt);
+    for (size_t f = 0; f < nt; ++f) {
+      const uint32_t* t = &arrays_.triangles[3 * f];
+      uint32_t* q = &quads_[4 * f];
+      q[0] = t[0], q[1] = t[1], q[2] = t[2], q[3] = t[2];
+      // (v0, v1, v3) = (t0, t1, t2): starts at stored corner 0.
+      pairs_[f] = Pair{{static_cast<uint32_t>(f), static_cast<uint32_t>(f)}, {0, 0}};
+    }
+  }
+  // Each face's preferred partner: its neighbour across its longest edge (a grid's
+  // diagonal: compact quads); faces that prefer each other pair (in parallel), then the
+  // rest greedily in face order with any unpaired neighbour. Deterministic: no step depends
+  // on the thread count. (OpenMesh's faces are consistently oriented and have three distinct
+  // vertices, so a neighbour holds the shared edge the other way round.)
+  void pair_triangles(const Mesh& mesh) {
+    const size_t nt = arrays_.triangle_count();
+    constexpr uint32_t kNone = ~0u;
+    // partner[f]: the face f pairs with; edge[f]: the corner k of f whose halfedge (from
+    // corner k-1 to corner k) it shares with its partner.
+    std::vector<uint32_t> partner(nt, kNone), pref(nt, kNone);
+    std::vector<uint8_t> edge(nt, 0), pref_edge(nt, 0);
+    auto neighbour = [&](HalfedgeHandle h) {
+      const FaceHandle g = mesh.opposite_face_handle(h);
+      return g.is_valid() ? static_cast<uint32_t>(g.idx()) : kNone;
+    };
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, nt, 4096), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t f = r.begin(); f < r.end(); ++f) {
+        const auto hs = face_halfedges(mesh, FaceHandle(static_cast<int>(f)));
+        const uint32_t* t = &arrays_.triangles[3 * f];
+        const float* p[3] = {&arrays_.positions[3 * size_t{t[0]}], &arrays_.positions[3 * size_t{t[1]}], &arrays_.positions[3 * size_t{t[2]}]};
+        float best_len = -1;
+        for (size_t k = 0, prev = 2; k < 3; prev = k++) {
+          const uint32_t g = neighbour(hs[k]);
+          const float dx = p[k][0] - p[prev][0], dy = p[k][1] - p[prev][1], dz = p[k][2] - p[prev][2];
+          const float len = dx * dx + dy * dy + dz * dz;
+          if (g != kNone && g != f && len > best_len) pref[f] = g, pref_edge[f] = static_cast<uint8_t>(k), best_len = len;
+        }
+      }
+    });
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, nt, 4096), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t f = r.begin(); f < r.end(); ++f)
+        if (pref[f] != kNone && pref[pref[f]] == f) partner[f] = pref[f], edge[f] = pref_edge[f];
+    });
+    for (size_t f = 0; f < nt; ++f) {
+      if (partner[f] != kNone || pref[f] == kNone) continue;
+      const auto hs = face_halfedges(mesh, FaceHandle(static_cast<int>(f)));
+      for (size_t k = 0; k < 3; ++k) {
+        const uint32_t g = neighbour(hs[k]);
+        if (g == kNone || g == f || partner[g] != kNone) continue;
+        partner[f] = g, edge[f] = static_cast<uint8_t>(k);
+        partner[g] = static_cast<uint32_t>(f);  // its edge is not needed: f comes first
+        break;
+      }
+    }
+    size_t nq = 0;
+    for (size_t f = 0; f < nt; ++f) nq += partner[f] == kNone || partner[f] > f;
+    quads_.resize(4 * nq);
+    pairs_.resize(nq);
+    for (size_t f = 0, q = 0; f < nt; ++f) {
+      const uint32_t* t = &arrays_.triangles[3 * f];
+      const uint32_t g = partner[f];
+      uint32_t* out = &quads_[4 * q];
+      if (g == kNone) {
+        out[0] = t[0], out[1] = t[1], out[2] = t[2], out[3] = t[2];
+        pairs_[q++] = Pair{{static_cast<uint32_t>(f), static_cast<uint32_t>(f)}, {0, 0}};
+        continue;
+      }
+      if (g < f) continue;  // emitted with its partner
+      // f = (a, b, c) from corner k+1 on, the shared edge b -> c; the partner holds c -> b
+      // and its third corner d: quad (a, b, d, c), triangles (a, b, c) and (d, c, b).
+      const int k = edge[f], ka = k == 2 ? 0 : k + 1, kb = k == 0 ? 2 : k - 1;
+      const uint32_t b = t[kb], c = t[k];
+      const uint32_t* s = &arrays_.triangles[3 * size_t{g}];
+      const uint8_t kd = s[0] != b && s[0] != c ? 0 : s[1] != b && s[1] != c ? 1 : 2;
+      out[0] = t[ka], out[1] = b, out[2] = s[kd], out[3] = c;
+      pairs_[q++] = Pair{{static_cast<uint32_t>(f), g}, {static_cast<uint8_t>(ka), kd}};
+    }
+  }
+
   MeshArrays arrays_;
+  std::vector<uint32_t> quads_;
+  std::vector<Pair> pairs_;
   bool filters_ = false;
   RTCDevice device_ = nullptr;
   RTCScene scene_ = nullptr;

@@ -1,0 +1,120 @@
+// RayScene pairs the mesh's triangles into Embree quads; its hits must still be the
+// triangles' hits: the same triangle, distance and barycentrics (over the triangle's stored
+// corners) as a brute-force intersection of every triangle, in double precision.
+#include "ray_scene.hpp"
+
+#include "meso/examples/brick_wall.hpp"
+#include "meso/examples/parametric.hpp"
+#include "test_support.hpp"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+namespace meso {
+namespace {
+
+struct Exact {
+  double t = std::numeric_limits<double>::infinity();
+  uint32_t prim = 0;
+  double u = 0, v = 0, edge = 0;  // edge: the smallest barycentric (distance to an edge)
+  double second = std::numeric_limits<double>::infinity();  // the next triangle's t
+};
+
+// Moeller-Trumbore against every triangle, in double: the nearest hit in [0, tfar].
+Exact brute_force(const RayScene& scene, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double tfar) {
+  Exact best;
+  const auto& tris = scene.arrays().triangles;
+  for (uint32_t f = 0; f < scene.arrays().triangle_count(); ++f) {
+    const Eigen::Vector3d p0 = scene.position(tris[3 * f]), p1 = scene.position(tris[3 * f + 1]), p2 = scene.position(tris[3 * f + 2]);
+    const Eigen::Vector3d e1 = p1 - p0, e2 = p2 - p0, pv = d.cross(e2);
+    const double det = e1.dot(pv);
+    if (std::abs(det) < 1e-300) continue;
+    const Eigen::Vector3d tv = o - p0, qv = tv.cross(e1);
+    const double u = tv.dot(pv) / det, v = d.dot(qv) / det, t = e2.dot(qv) / det;
+    if (u < 0 || v < 0 || u + v > 1 || t < 0 || t > tfar) continue;
+    if (t < best.t) {
+      best.second = best.t;
+      best = Exact{t, f, u, v, std::min({u, v, 1 - u - v}), best.second};
+    } else {
+      best.second = std::min(best.second, t);
+    }
+  }
+  return best;
+}
+
+void expect_triangle_hits(const Mesh& mesh, unsigned seed) {
+  const Vec3f c = bounding_box(mesh).center();
+  const RayScene scene(mesh, Eigen::Vector3d(c[0], c[1], c[2]));
+  ASSERT_LT(scene.quad_count(), mesh.n_faces()) << "no triangles were paired";
+  const auto box = bounding_box(mesh);
+  const double diag = box.diagonal();
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> unit(-0.6, 0.6), sphere(-1.0, 1.0);
+  int hits = 0, checked = 0;
+  for (int i = 0; i < 3000; ++i) {
+    // Every other ray aims near a vertex (most hit), the rest go anywhere (many miss).
+    Eigen::Vector3d o(unit(rng) * diag, unit(rng) * diag, unit(rng) * diag), d;
+    if (i % 2 == 0) {
+      const VertexHandle v(static_cast<int>(rng() % mesh.n_vertices()));
+      const Vec3f p = mesh.point(v) - c;
+      d = Eigen::Vector3d(p[0] + 0.01 * diag * unit(rng), p[1] + 0.01 * diag * unit(rng), p[2] + 0.01 * diag * unit(rng)) - o;
+    } else {
+      do d = Eigen::Vector3d(sphere(rng), sphere(rng), sphere(rng));
+      while (d.squaredNorm() > 1 || d.squaredNorm() < 1e-4);
+    }
+    d.normalize();
+    const Vec3f of(static_cast<float>(o.x()), static_cast<float>(o.y()), static_cast<float>(o.z()));
+    const Vec3f df(static_cast<float>(d.x()), static_cast<float>(d.y()), static_cast<float>(d.z()));
+    // The brute force sees the ray as Embree does: float origin and direction.
+    const Eigen::Vector3d od(of[0], of[1], of[2]), dd(df[0], df[1], df[2]);
+    const float tfar = static_cast<float>(2 * diag);
+    const Exact e = brute_force(scene, od, dd, tfar);
+    const RayScene::Hit h = scene.intersect(of, df, 0.0f, tfar);
+    const double tol = 1e-5 * diag;
+    // Skip rays whose answer float rounding may change: through an edge, or two surfaces
+    // within the tolerance of each other.
+    if (std::isfinite(e.t) && (e.edge < 1e-4 || e.second - e.t < 10 * tol)) continue;
+    ++checked;
+    ASSERT_EQ(h.valid(), std::isfinite(e.t)) << "ray " << i;
+    if (!h.valid()) continue;
+    ++hits;
+    EXPECT_EQ(h.prim, e.prim) << "ray " << i;
+    EXPECT_NEAR(h.t, e.t, tol) << "ray " << i;
+    EXPECT_NEAR(h.u, e.u, 1e-4) << "ray " << i;
+    EXPECT_NEAR(h.v, e.v, 1e-4) << "ray " << i;
+    // collect() reports the same triangle at the same place.
+    RayScene::Candidates cs;
+    if (scene.collect(of, df, 0.0f, tfar, 0.0f, cs)) {
+      ASSERT_GE(cs.n, 1);
+      int first = 0;
+      for (int j = 1; j < cs.n; ++j)
+        if (cs.hit[j].t < cs.hit[first].t) first = j;
+      EXPECT_EQ(cs.hit[first].prim, h.prim);
+      EXPECT_EQ(cs.hit[first].t, h.t);
+      EXPECT_EQ(cs.hit[first].u, h.u);
+      EXPECT_EQ(cs.hit[first].v, h.v);
+    }
+  }
+  EXPECT_GT(checked, 2500);
+  EXPECT_GT(hits, 1000);
+}
+
+TEST(RayScene, QuadsHitAsTheirTrianglesOnAClosedSurface) { expect_triangle_hits(make_smooth_torus(40, 20), 1u); }
+
+TEST(RayScene, QuadsHitAsTheirTrianglesOnABrickWall) {
+  BrickWallOptions o;
+  o.columns = 48;
+  o.rows = 24;
+  expect_triangle_hits(make_brick_wall(o), 2u);
+}
+
+// Holes and a lone triangle leave faces without a partner: single quads.
+TEST(RayScene, QuadsHitAsTheirTrianglesWhereFacesStaySingle) {
+  const Mesh torus = make_smooth_torus(30, 14);
+  const Mesh holed = test::without_faces(torus, [](const Mesh&, FaceHandle f) { return f.idx() % 7 == 3 || f.idx() % 11 == 5; });
+  expect_triangle_hits(holed, 3u);
+}
+
+}  // namespace
+}  // namespace meso
