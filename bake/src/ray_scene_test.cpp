@@ -43,10 +43,12 @@ Exact brute_force(const RayScene& scene, const Eigen::Vector3d& o, const Eigen::
   return best;
 }
 
-void expect_triangle_hits(const Mesh& mesh, unsigned seed) {
+void expect_triangle_hits(const Mesh& mesh, unsigned seed, bool paired = true) {
   const Vec3f c = bounding_box(mesh).center();
   const RayScene scene(mesh, Eigen::Vector3d(c[0], c[1], c[2]));
-  ASSERT_LT(scene.quad_count(), mesh.n_faces()) << "no triangles were paired";
+  if (paired) {
+    ASSERT_LT(scene.quad_count(), mesh.n_faces()) << "no triangles were paired";
+  }
   const auto box = bounding_box(mesh);
   const double diag = box.diagonal();
   std::mt19937 rng(seed);
@@ -114,6 +116,18 @@ TEST(RayScene, QuadsHitAsTheirTrianglesWhereFacesStaySingle) {
   const Mesh torus = make_smooth_torus(30, 14);
   const Mesh holed = test::without_faces(torus, [](const Mesh&, FaceHandle f) { return f.idx() % 7 == 3 || f.idx() % 11 == 5; });
   expect_triangle_hits(holed, 3u);
+}
+
+// A mesh with deleted faces (not garbage-collected) is flattened without them and its
+// triangles stay single: the hits are still the remaining triangles'.
+TEST(RayScene, DeletedFacesAreLeftOutAndTheRestHitAsTriangles) {
+  Mesh torus = make_smooth_torus(24, 12);
+  torus.request_face_status();
+  torus.request_edge_status();
+  torus.request_vertex_status();
+  for (auto f : torus.faces())
+    if (f.idx() % 5 == 0) torus.delete_face(f, false);
+  expect_triangle_hits(torus, 4u, false);
 }
 
 }  // namespace
