@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 
 namespace meso {
@@ -116,6 +117,42 @@ TEST(RayScene, QuadsHitAsTheirTrianglesWhereFacesStaySingle) {
   const Mesh torus = make_smooth_torus(30, 14);
   const Mesh holed = test::without_faces(torus, [](const Mesh&, FaceHandle f) { return f.idx() % 7 == 3 || f.idx() % 11 == 5; });
   expect_triangle_hits(holed, 3u);
+}
+
+// Robust mode: rays through shared edges (the diagonals inside quads, and the edges between
+// quads or single triangles) and shared vertices find one of the faces there: no cracks.
+TEST(RayScene, RaysThroughEdgesAndVerticesFindAFace) {
+  const Mesh torus = make_smooth_torus(36, 18);
+  const Vec3f c = bounding_box(torus).center();
+  const RayScene scene(torus, Eigen::Vector3d(c[0], c[1], c[2]));
+  ASSERT_LT(scene.quad_count(), torus.n_faces());
+  int rays = 0;
+  auto cast_at = [&](const Vec3f& at, const Vec3f& n, std::initializer_list<int> faces) {
+    const float h = 0.01f;
+    const Vec3f org = at - c + h * n;
+    const RayScene::Hit hit = scene.intersect(org, -n, 0.0f, 2 * h);
+    ++rays;
+    ASSERT_TRUE(hit.valid()) << "a crack at (" << at[0] << ", " << at[1] << ", " << at[2] << ")";
+    EXPECT_NEAR(hit.t, h, 1e-5f);
+    EXPECT_TRUE(std::find(faces.begin(), faces.end(), static_cast<int>(hit.prim)) != faces.end());
+  };
+  for (auto e : torus.edges()) {
+    const auto h0 = torus.halfedge_handle(e, 0), h1 = torus.halfedge_handle(e, 1);
+    const FaceHandle f0 = torus.face_handle(h0), f1 = torus.face_handle(h1);
+    const Vec3f a = torus.point(torus.from_vertex_handle(h0)), b = torus.point(torus.to_vertex_handle(h0));
+    const Vec3f n = (torus.calc_face_normal(f0) + torus.calc_face_normal(f1)).normalized();
+    for (float s : {0.5f, 1.0f / 3.0f}) cast_at(a + s * (b - a), n, {f0.idx(), f1.idx()});
+  }
+  for (auto v : torus.vertices()) {
+    std::vector<int> faces;
+    for (auto f : torus.vf_range(v)) faces.push_back(f.idx());
+    const Vec3f n = torus.normal(v);
+    const float h = 0.01f;
+    const RayScene::Hit hit = scene.intersect(torus.point(v) - c + h * n, -n, 0.0f, 2 * h);
+    ASSERT_TRUE(hit.valid()) << "a hole at vertex " << v.idx();
+    EXPECT_TRUE(std::find(faces.begin(), faces.end(), static_cast<int>(hit.prim)) != faces.end());
+  }
+  EXPECT_GT(rays, 3000);
 }
 
 // A mesh with deleted faces (not garbage-collected) is flattened without them and its
