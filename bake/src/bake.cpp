@@ -382,28 +382,20 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
     // a ray to `probe` that finds nothing settles it; if it finds something, the whole ray.
     auto collect_first = [&](const Vec3f& org, const Vec3f& dir_s, int way, float tfar, float probe) -> bool {
       if (all_hits || o.ignore_backfaces) return false;
+      // Nothing within `probe` (the usual answer): an any-hit query settles it for less than
+      // a closest-hit one, which must order its descent by distance.
+      if (probe < tfar) {
+        ++rays;
+        if (!scene.occluded(org, dir_s, 0.0f, probe)) return true;
+      }
       RayScene::Candidates c;
       const float window = 2.0f * r.bunch + 1e-6f * (tfar + eps);
-      bool complete = true;  // c holds every candidate up to the nearest's t + window
-      if (probe < tfar) {
-        rays += scene.filters();
-        if (!scene.collect(org, dir_s, 0.0f, probe, window, c)) return false;
-        if (c.n == 0) return true;
-        complete = false;  // only up to `probe`: enough if the checks below stay within it
-      }
-      rays += complete && scene.filters();
-      if (complete && !scene.collect(org, dir_s, 0.0f, tfar, window, c)) return false;
+      rays += scene.filters();
+      if (!scene.collect(org, dir_s, 0.0f, tfar, window, c)) return false;
       if (c.n == 0) return true;  // intersect() misses
       int first = 0;
       for (int j = 1; j < c.n; ++j)
         if (c.hit[j].t < c.hit[first].t) first = j;
-      if (!complete && !(c.hit[first].t + window <= probe)) {
-        ++rays;
-        if (!scene.collect(org, dir_s, 0.0f, tfar, window, c)) return false;
-        first = 0;
-        for (int j = 1; j < c.n; ++j)
-          if (c.hit[j].t < c.hit[first].t) first = j;
-      }
       const RayScene::Candidate& h = c.hit[first];
       for (int j = 0; j < c.n; ++j)
         if (c.hit[j].t == h.t && c.hit[j].prim != h.prim) return false;  // a tie: Embree's pick
