@@ -13,79 +13,13 @@
 namespace meso {
 namespace {
 
+using test::brute_psi;
 using test::bumps;
 using test::field_from;
 using test::noise;
-
-
-
-// Structured maps: steps, a single spike, smooth bumps.
-HeightField steps(int w, int h) {
-  return field_from(w, h, Border::clamp, [](int x, int y) { return static_cast<float>(((x / 3) + (y / 5)) % 4); });
-}
+using test::steps;
 
 double ratio_texels(const Image& cone, int i, int j) { return static_cast<double>(cone.at(i, j, 1)) * cone.width; }
-
-// Brute force over the definition: psi = sup (S(y) - T_p) / dist(y, F_p) over the surface,
-// sampled at n x n points of every quarter-texel piece (the pieces' corners included), over
-// `tiles` copies of the map each way when it wraps. Relaxed: only points some corner of F_p
-// sees descending (the piece's own gradient, as at a crease the ray comes from that side).
-double brute_psi(const HeightField& f, int i, int j, double top, bool relaxed, int n, int tiles) {
-  const int w = f.height.width, h = f.height.height;
-  double psi = 0;
-  for (int ty = -tiles; ty <= tiles; ++ty)
-    for (int tx = -tiles; tx <= tiles; ++tx)
-      for (int b = 0; b < 2 * h; ++b)
-        for (int a = 0; a < 2 * w; ++a) {
-          const double px = 0.5 * a, py = 0.5 * b;
-          const double v00 = f.bilinear(px, py), v10 = f.bilinear(px + 0.5, py), v01 = f.bilinear(px, py + 0.5),
-                       v11 = f.bilinear(px + 0.5, py + 0.5);
-          if (std::max({v00, v10, v01, v11}) <= top) continue;
-          // Pieces within a texel of F: 8 times denser, where psi changes fastest.
-          const double gap_x = std::max({i - (px + 0.5 + tx * w), 0.0, px + tx * w - (i + 1)});
-          const double gap_y = std::max({j - (py + 0.5 + ty * h), 0.0, py + ty * h - (j + 1)});
-          // plus points closing in on the piece's edges, where limits toward F's boundary live.
-          const bool near = std::hypot(gap_x, gap_y) < 1;
-          const int m = near ? 8 * n : n;
-          std::vector<double> at;
-          for (int k = 0; k <= m; ++k) at.push_back(static_cast<double>(k) / m);
-          if (near)
-            for (double e : {1e-6, 1e-4, 1e-3}) {
-              at.push_back(e);
-              at.push_back(1 - e);
-            }
-          std::vector<std::pair<double, double>> points;
-          for (double t : at)
-            for (double s : at) points.emplace_back(s, t);
-          if (near)
-            // Fans of directions out of each corner of the piece: where S reaches T on F's
-            // boundary, psi's supremum is a limit along one direction out of that point.
-            for (double cs : {0.0, 1.0})
-              for (double ct : {0.0, 1.0})
-                for (int k = 0; k <= 256; ++k) {
-                  const double angle = 1.5707963267948966 * k / 256, r = 1e-5;
-                  points.emplace_back(std::abs(cs - r * std::cos(angle)), std::abs(ct - r * std::sin(angle)));
-                }
-          for (const auto& [s, t] : points) {
-              const double v = v00 + (v10 - v00) * s + (v01 - v00) * t + (v00 - v10 - v01 + v11) * s * t;
-              if (v <= top) continue;
-              const double x = px + 0.5 * s + tx * w, y = py + 0.5 * t + ty * h;
-              const double dx = std::max({i - x, 0.0, x - (i + 1)}), dy = std::max({j - y, 0.0, y - (j + 1)});
-              const double d = std::hypot(dx, dy);
-              if (d <= 0) continue;
-              if (relaxed) {
-                const double gx = 2 * ((v10 - v00) + (v00 - v10 - v01 + v11) * t);
-                const double gy = 2 * ((v01 - v00) + (v00 - v10 - v01 + v11) * s);
-                bool falls = false;
-                for (double fx : {static_cast<double>(i), i + 1.0})
-                  for (double fy : {static_cast<double>(j), j + 1.0}) falls |= gx * (x - fx) + gy * (y - fy) < 0;
-                if (!falls) continue;
-              }
-              psi = std::max(psi, (v - top) / d);
-            }
-        }
-  return psi;
-}
 
 struct BruteCase {
   const char* name;
