@@ -75,7 +75,12 @@ INSTANTIATE_TEST_SUITE_P(
                                          BruteCase{"noise32", [] { return noise(32, 32, Border::clamp, 5); }, 4, 0},
                                          BruteCase{"spike32", [] { return field_from(32, 32, Border::clamp, [](int x, int y) {
                                                      return x == 13 && y == 18 ? 1.0f : 0.0f;
-                                                   }); }, 4, 0}),
+                                                   }); }, 4, 0},
+                                         // Flat at the bottom and at the top of the box: nothing is above any
+                                         // apex, so the brute force finds no limit and every cone is the cap (the
+                                         // wrapped map's neighbouring copies, as flat, are left out: 4 s more).
+                                         BruteCase{"zero32", [] { return test::all_zero(32, 32, Border::clamp); }, 4, 0},
+                                         BruteCase{"one32_wrap", [] { return test::all_one(32, 32, Border::wrap); }, 4, 0}),
                        ::testing::Values(ConeKind::conservative, ConeKind::relaxed)),
     [](const auto& param_info) {
       return std::string(std::get<0>(param_info.param).name) + "_" + cone_kind_name(std::get<1>(param_info.param));
@@ -115,9 +120,12 @@ TEST(ConeMap, RampHasItsSlopeAndNoRelaxedLimit) {
 TEST(ConeMap, DegenerateMapsGetFiniteCappedCones) {
   for (const auto& [w, h] : {std::pair{1, 1}, std::pair{1, 7}, std::pair{9, 1}, std::pair{6, 4}}) {
     for (Border border : {Border::clamp, Border::wrap}) {
-      const Image flat = build_cone_map(field_from(w, h, border, [](int, int) { return 3.0f; }), {});
-      for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x) EXPECT_EQ(flat.at(x, y, 1), kConeRatioCap);
+      for (const HeightField& flat_field : {field_from(w, h, border, [](int, int) { return 3.0f; }), test::all_one(w, h, border)})
+        for (ConeKind kind : {ConeKind::conservative, ConeKind::relaxed}) {
+          const Image flat = build_cone_map(flat_field, {kind, 1e-4, false});
+          for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) EXPECT_EQ(flat.at(x, y, 1), kConeRatioCap);
+        }
       const HeightField n = noise(w, h, border, 5);
       for (ConeKind kind : {ConeKind::conservative, ConeKind::relaxed}) {
         const Image cone = build_cone_map(n, {kind, 1e-4, false});
