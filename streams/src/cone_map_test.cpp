@@ -73,9 +73,7 @@ INSTANTIATE_TEST_SUITE_P(
                                          BruteCase{"bumps_wrap", [] { return bumps(12, 12, Border::wrap); }, 4, 2},
                                          // The 32² sizes, sampled more coarsely away from F.
                                          BruteCase{"noise32", [] { return noise(32, 32, Border::clamp, 5); }, 4, 0},
-                                         BruteCase{"spike32", [] { return field_from(32, 32, Border::clamp, [](int x, int y) {
-                                                     return x == 13 && y == 18 ? 1.0f : 0.0f;
-                                                   }); }, 4, 0},
+                                         BruteCase{"spike32", [] { return test::spike(32, 32, Border::clamp, 13, 18); }, 4, 0},
                                          // Flat at the bottom and at the top of the box: nothing is above any
                                          // apex, so the brute force finds no limit and every cone is the cap (the
                                          // wrapped map's neighbouring copies, as flat, are left out: 4 s more).
@@ -90,7 +88,7 @@ INSTANTIATE_TEST_SUITE_P(
 // reaches exactly to the peak (the flanks fall at least as fast as the distance shrinks), so
 // the ratio is the distance from the footprint to the peak: k - 1/2 texels per unit height.
 TEST(ConeMap, SpikeGivesTheDistanceToThePeak) {
-  const HeightField f = field_from(11, 11, Border::clamp, [](int x, int y) { return x == 5 && y == 5 ? 1.0f : 0.0f; });
+  const HeightField f = test::spike(11, 11, Border::clamp, 5, 5);
   const Image cone = build_cone_map(f, {});
   for (int k = 2; k <= 5; ++k) {
     EXPECT_NEAR(ratio_texels(cone, 5 - k, 5), k - 0.5, (k - 0.5) * 1e-4) << k;
