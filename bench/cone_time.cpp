@@ -3,16 +3,15 @@
 //   cone_time MAP SIZE RELAXED [THREADS [OUT.raw]]
 // MAP: 0 = the example's bricks, 1 = uniform noise, 2 = smooth bumps (as bench/stages_bench.cpp).
 // OUT.raw receives the cone map's float pixels as they are in memory.
-#include "meso/examples/brick_wall.hpp"
 #include "meso/streams/cone_map.hpp"
+
+#include "bench_maps.hpp"
 
 #include <tbb/global_control.h>
 
 #include <chrono>
-#include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <random>
 
 int main(int argc, char** argv) {
   using namespace meso;
@@ -24,15 +23,7 @@ int main(int argc, char** argv) {
   const bool relaxed = std::atoi(argv[3]) != 0;
   const int threads = argc > 4 ? std::atoi(argv[4]) : 1;
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
-  Image img(n, n, 1);
-  std::mt19937 rng(1);
-  std::uniform_real_distribution<float> d(0.0f, 1.0f);
-  for (int y = 0; y < n; ++y)
-    for (int x = 0; x < n; ++x)
-      img.at(x, y) = kind == 0   ? brick_wall_height(BrickWallOptions{}, 2.0f * x / n, 1.0f * y / n)
-                     : kind == 1 ? d(rng)
-                                 : static_cast<float>(std::sin(6.2831853 * 4 * x / n) * std::cos(6.2831853 * 3 * y / n));
-  const HeightField f = make_height_field(img, Border::clamp);
+  const HeightField f = bench::bench_height_field(static_cast<bench::BenchMap>(kind), n);
   ConeMapOptions o;
   o.kind = relaxed ? ConeKind::relaxed : ConeKind::conservative;
   const auto start = std::chrono::steady_clock::now();

@@ -10,6 +10,8 @@
 #include "meso/streams/pyramid.hpp"
 #include "meso/uvpack/uv_check.hpp"
 
+#include "bench_maps.hpp"
+
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -54,13 +56,7 @@ void BM_MeshReduce(benchmark::State& state) {
 }
 BENCHMARK(BM_MeshReduce)->Arg(10)->Arg(100)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 
-// The example's height function sampled on an n x n map.
-HeightField brick_height_field(int n) {
-  Image img(n, n, 1);
-  for (int y = 0; y < n; ++y)
-    for (int x = 0; x < n; ++x) img.at(x, y) = brick_wall_height(BrickWallOptions{}, 2.0f * x / n, 1.0f * y / n);
-  return make_height_field(img, Border::clamp);
-}
+HeightField brick_height_field(int n) { return bench::bench_height_field(bench::BenchMap::bricks, n); }
 
 void BM_MinMaxPyramid(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
@@ -102,18 +98,8 @@ void BM_DistanceField(benchmark::State& state) {
 }
 BENCHMARK(BM_DistanceField)->Arg(256)->Arg(1024)->Unit(benchmark::kMillisecond)->UseRealTime();
 
-// Height maps for the cone benchmarks: 0 = the example's bricks, 1 = uniform noise,
-// 2 = smooth bumps (the hard case: cones touch the surface along its inflections).
-HeightField cone_input(int kind, int n) {
-  if (kind == 0) return brick_height_field(n);
-  Image img(n, n, 1);
-  std::mt19937 rng(1);
-  std::uniform_real_distribution<float> d(0.0f, 1.0f);
-  for (int y = 0; y < n; ++y)
-    for (int x = 0; x < n; ++x)
-      img.at(x, y) = kind == 1 ? d(rng) : static_cast<float>(std::sin(6.2831853 * 4 * x / n) * std::cos(6.2831853 * 3 * y / n));
-  return make_height_field(img, Border::clamp);
-}
+// Height maps for the cone benchmarks (bench_maps.hpp): 0 = bricks, 1 = noise, 2 = bumps.
+HeightField cone_input(int kind, int n) { return bench::bench_height_field(static_cast<bench::BenchMap>(kind), n); }
 
 void BM_ConeMap(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));

@@ -13,79 +13,13 @@
 namespace meso {
 namespace {
 
+using test::brute_psi;
 using test::bumps;
 using test::field_from;
 using test::noise;
-
-
-
-// Structured maps: steps, a single spike, smooth bumps.
-HeightField steps(int w, int h) {
-  return field_from(w, h, Border::clamp, [](int x, int y) { return static_cast<float>(((x / 3) + (y / 5)) % 4); });
-}
+using test::steps;
 
 double ratio_texels(const Image& cone, int i, int j) { return static_cast<double>(cone.at(i, j, 1)) * cone.width; }
-
-// Brute force over the definition: psi = sup (S(y) - T_p) / dist(y, F_p) over the surface,
-// sampled at n x n points of every quarter-texel piece (the pieces' corners included), over
-// `tiles` copies of the map each way when it wraps. Relaxed: only points some corner of F_p
-// sees descending (the piece's own gradient, as at a crease the ray comes from that side).
-double brute_psi(const HeightField& f, int i, int j, double top, bool relaxed, int n, int tiles) {
-  const int w = f.height.width, h = f.height.height;
-  double psi = 0;
-  for (int ty = -tiles; ty <= tiles; ++ty)
-    for (int tx = -tiles; tx <= tiles; ++tx)
-      for (int b = 0; b < 2 * h; ++b)
-        for (int a = 0; a < 2 * w; ++a) {
-          const double px = 0.5 * a, py = 0.5 * b;
-          const double v00 = f.bilinear(px, py), v10 = f.bilinear(px + 0.5, py), v01 = f.bilinear(px, py + 0.5),
-                       v11 = f.bilinear(px + 0.5, py + 0.5);
-          if (std::max({v00, v10, v01, v11}) <= top) continue;
-          // Pieces within a texel of F: 8 times denser, where psi changes fastest.
-          const double gap_x = std::max({i - (px + 0.5 + tx * w), 0.0, px + tx * w - (i + 1)});
-          const double gap_y = std::max({j - (py + 0.5 + ty * h), 0.0, py + ty * h - (j + 1)});
-          // plus points closing in on the piece's edges, where limits toward F's boundary live.
-          const bool near = std::hypot(gap_x, gap_y) < 1;
-          const int m = near ? 8 * n : n;
-          std::vector<double> at;
-          for (int k = 0; k <= m; ++k) at.push_back(static_cast<double>(k) / m);
-          if (near)
-            for (double e : {1e-6, 1e-4, 1e-3}) {
-              at.push_back(e);
-              at.push_back(1 - e);
-            }
-          std::vector<std::pair<double, double>> points;
-          for (double t : at)
-            for (double s : at) points.emplace_back(s, t);
-          if (near)
-            // Fans of directions out of each corner of the piece: where S reaches T on F's
-            // boundary, psi's supremum is a limit along one direction out of that point.
-            for (double cs : {0.0, 1.0})
-              for (double ct : {0.0, 1.0})
-                for (int k = 0; k <= 256; ++k) {
-                  const double angle = 1.5707963267948966 * k / 256, r = 1e-5;
-                  points.emplace_back(std::abs(cs - r * std::cos(angle)), std::abs(ct - r * std::sin(angle)));
-                }
-          for (const auto& [s, t] : points) {
-              const double v = v00 + (v10 - v00) * s + (v01 - v00) * t + (v00 - v10 - v01 + v11) * s * t;
-              if (v <= top) continue;
-              const double x = px + 0.5 * s + tx * w, y = py + 0.5 * t + ty * h;
-              const double dx = std::max({i - x, 0.0, x - (i + 1)}), dy = std::max({j - y, 0.0, y - (j + 1)});
-              const double d = std::hypot(dx, dy);
-              if (d <= 0) continue;
-              if (relaxed) {
-                const double gx = 2 * ((v10 - v00) + (v00 - v10 - v01 + v11) * t);
-                const double gy = 2 * ((v01 - v00) + (v00 - v10 - v01 + v11) * s);
-                bool falls = false;
-                for (double fx : {static_cast<double>(i), i + 1.0})
-                  for (double fy : {static_cast<double>(j), j + 1.0}) falls |= gx * (x - fx) + gy * (y - fy) < 0;
-                if (!falls) continue;
-              }
-              psi = std::max(psi, (v - top) / d);
-            }
-        }
-  return psi;
-}
 
 struct BruteCase {
   const char* name;
@@ -139,9 +73,12 @@ INSTANTIATE_TEST_SUITE_P(
                                          BruteCase{"bumps_wrap", [] { return bumps(12, 12, Border::wrap); }, 4, 2},
                                          // The 32² sizes, sampled more coarsely away from F.
                                          BruteCase{"noise32", [] { return noise(32, 32, Border::clamp, 5); }, 4, 0},
-                                         BruteCase{"spike32", [] { return field_from(32, 32, Border::clamp, [](int x, int y) {
-                                                     return x == 13 && y == 18 ? 1.0f : 0.0f;
-                                                   }); }, 4, 0}),
+                                         BruteCase{"spike32", [] { return test::spike(32, 32, Border::clamp, 13, 18); }, 4, 0},
+                                         // Flat at the bottom and at the top of the box: nothing is above any
+                                         // apex, so the brute force finds no limit and every cone is the cap (the
+                                         // wrapped map's neighbouring copies, as flat, are left out: 4 s more).
+                                         BruteCase{"zero32", [] { return test::all_zero(32, 32, Border::clamp); }, 4, 0},
+                                         BruteCase{"one32_wrap", [] { return test::all_one(32, 32, Border::wrap); }, 4, 0}),
                        ::testing::Values(ConeKind::conservative, ConeKind::relaxed)),
     [](const auto& param_info) {
       return std::string(std::get<0>(param_info.param).name) + "_" + cone_kind_name(std::get<1>(param_info.param));
@@ -151,7 +88,7 @@ INSTANTIATE_TEST_SUITE_P(
 // reaches exactly to the peak (the flanks fall at least as fast as the distance shrinks), so
 // the ratio is the distance from the footprint to the peak: k - 1/2 texels per unit height.
 TEST(ConeMap, SpikeGivesTheDistanceToThePeak) {
-  const HeightField f = field_from(11, 11, Border::clamp, [](int x, int y) { return x == 5 && y == 5 ? 1.0f : 0.0f; });
+  const HeightField f = test::spike(11, 11, Border::clamp, 5, 5);
   const Image cone = build_cone_map(f, {});
   for (int k = 2; k <= 5; ++k) {
     EXPECT_NEAR(ratio_texels(cone, 5 - k, 5), k - 0.5, (k - 0.5) * 1e-4) << k;
@@ -181,9 +118,12 @@ TEST(ConeMap, RampHasItsSlopeAndNoRelaxedLimit) {
 TEST(ConeMap, DegenerateMapsGetFiniteCappedCones) {
   for (const auto& [w, h] : {std::pair{1, 1}, std::pair{1, 7}, std::pair{9, 1}, std::pair{6, 4}}) {
     for (Border border : {Border::clamp, Border::wrap}) {
-      const Image flat = build_cone_map(field_from(w, h, border, [](int, int) { return 3.0f; }), {});
-      for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x) EXPECT_EQ(flat.at(x, y, 1), kConeRatioCap);
+      for (const HeightField& flat_field : {field_from(w, h, border, [](int, int) { return 3.0f; }), test::all_one(w, h, border)})
+        for (ConeKind kind : {ConeKind::conservative, ConeKind::relaxed}) {
+          const Image flat = build_cone_map(flat_field, {kind, 1e-4, false});
+          for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) EXPECT_EQ(flat.at(x, y, 1), kConeRatioCap);
+        }
       const HeightField n = noise(w, h, border, 5);
       for (ConeKind kind : {ConeKind::conservative, ConeKind::relaxed}) {
         const Image cone = build_cone_map(n, {kind, 1e-4, false});

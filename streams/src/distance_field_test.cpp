@@ -10,6 +10,7 @@
 #include <array>
 #include <cmath>
 #include <random>
+#include <string>
 
 namespace meso {
 namespace {
@@ -39,16 +40,24 @@ float brute_distance(const HeightField& f, const Image& top, const DistanceField
   return static_cast<float>(std::sqrt(best) / w);
 }
 
+enum class SdfMap { noise, spike, zero, one };
+
 struct SdfCase {
   int w, h, depth;
   float relief;
   Border border;
+  SdfMap map = SdfMap::noise;
+  bool heavy = false;  // seconds of brute force in a release build: skipped under ASan
 };
 class SdfExact : public ::testing::TestWithParam<SdfCase> {};
 
 TEST_P(SdfExact, MatchesBruteForce) {
   const auto c = GetParam();
-  const HeightField f = noise(c.w, c.h, c.border, 7u * static_cast<unsigned>(c.w) + static_cast<unsigned>(c.h));
+  if (MESO_TEST_UNDER_ASAN && c.heavy) GTEST_SKIP() << "brute force of " << c.w << "x" << c.h << "x" << c.depth << " too slow under ASan";
+  const HeightField f = c.map == SdfMap::noise   ? noise(c.w, c.h, c.border, 7u * static_cast<unsigned>(c.w) + static_cast<unsigned>(c.h))
+                        : c.map == SdfMap::spike ? test::spike(c.w, c.h, c.border, c.w / 2, c.h / 3)
+                        : c.map == SdfMap::zero  ? test::all_zero(c.w, c.h, c.border)
+                                                 : test::all_one(c.w, c.h, c.border);
   DistanceFieldOptions o;
   o.depth = c.depth;
   o.relief = c.relief;
@@ -60,11 +69,29 @@ TEST_P(SdfExact, MatchesBruteForce) {
         ASSERT_NEAR(df.at(x, y, k), brute_distance(f, top, o, x, y, k), 1e-6f) << x << "," << y << "," << k;
 }
 
+std::string sdf_case_name(const ::testing::TestParamInfo<SdfCase>& info) {
+  static const char* const maps[] = {"noise", "spike", "zero", "one"};
+  const SdfCase& c = info.param;
+  return std::string(maps[static_cast<int>(c.map)]) + std::to_string(c.w) + "x" + std::to_string(c.h) + "x" + std::to_string(c.depth) + "_" +
+         border_name(c.border);
+}
+
 INSTANTIATE_TEST_SUITE_P(Maps, SdfExact,
                          ::testing::Values(SdfCase{9, 7, 8, 0.1f, Border::clamp}, SdfCase{16, 16, 5, 0.5f, Border::wrap},
                                            SdfCase{1, 6, 4, 0.2f, Border::clamp}, SdfCase{1, 1, 3, 0.1f, Border::clamp},
                                            SdfCase{12, 3, 16, 0.05f, Border::clamp}, SdfCase{5, 4, 6, 1.5f, Border::wrap},
-                                           SdfCase{1, 1, 4, 0.3f, Border::wrap}));
+                                           SdfCase{1, 1, 4, 0.3f, Border::wrap},
+                                           // The sizes. The brute force costs voxels x texels (x 25 tiles
+                                           // when wrapping): 1.6 s for 64² x 32 slices in the ci build, which
+                                           // ASan skips; the other 64² case has 8 slices.
+                                           SdfCase{32, 32, 32, 0.1f, Border::clamp}, SdfCase{32, 32, 8, 0.3f, Border::wrap},
+                                           SdfCase{32, 32, 16, 0.5f, Border::clamp, SdfMap::spike},
+                                           SdfCase{32, 32, 4, 0.2f, Border::wrap, SdfMap::spike},
+                                           SdfCase{32, 32, 8, 0.1f, Border::clamp, SdfMap::zero},
+                                           SdfCase{32, 32, 4, 0.1f, Border::wrap, SdfMap::one},
+                                           SdfCase{64, 64, 32, 0.1f, Border::clamp, SdfMap::noise, true},
+                                           SdfCase{64, 64, 8, 0.2f, Border::clamp, SdfMap::spike}),
+                         sdf_case_name);
 
 TEST(Sdf, FlatMapIsTheHeightAboveIt) {
   const HeightField f = make_height_field(Image(8, 4, 1, 0.3f), Border::clamp);  // flat: all 0

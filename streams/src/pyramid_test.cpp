@@ -1,9 +1,12 @@
 #include "meso/streams/pyramid.hpp"
 
+#include "test_fields.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <random>
+#include <string>
 
 namespace meso {
 namespace {
@@ -60,10 +63,33 @@ void sampled_range(const HeightField& f, double x0, double x1, double y0, double
     }
 }
 
+// The map families: noise (heights outside [0, 1] before normalising), steps, a
+// single-texel spike, all-zero and all-one.
+enum class PyramidMap { noise, steps, spike, zero, one };
+
 struct PyramidCase {
   int w, h;
   Border border;
+  PyramidMap map = PyramidMap::noise;
 };
+
+HeightField pyramid_input(const PyramidCase& c) {
+  switch (c.map) {
+    case PyramidMap::noise: return random_field(c.w, c.h, c.border, 42u + static_cast<unsigned>(c.w));
+    case PyramidMap::steps: return test::steps(c.w, c.h, c.border);
+    case PyramidMap::spike: return test::spike(c.w, c.h, c.border, c.w / 3, c.h / 2);
+    case PyramidMap::zero: return test::all_zero(c.w, c.h, c.border);
+    case PyramidMap::one: return test::all_one(c.w, c.h, c.border);
+  }
+  return {};
+}
+
+std::string pyramid_case_name(const ::testing::TestParamInfo<PyramidCase>& info) {
+  static const char* const maps[] = {"noise", "steps", "spike", "zero", "one"};
+  const PyramidCase& c = info.param;
+  return std::string(maps[static_cast<int>(c.map)]) + std::to_string(c.w) + "x" + std::to_string(c.h) + "_" + border_name(c.border);
+}
+
 class PyramidBounds : public ::testing::TestWithParam<PyramidCase> {};
 
 // Brute force over the definition: every level's [min, max] contains the filtered surface
@@ -71,7 +97,7 @@ class PyramidBounds : public ::testing::TestWithParam<PyramidCase> {};
 // to level-0 texels (level 0 always; every level when the size is a power of two).
 TEST_P(PyramidBounds, ExactAndConservative) {
   const auto c = GetParam();
-  const HeightField f = random_field(c.w, c.h, c.border, 42u + static_cast<unsigned>(c.w));
+  const HeightField f = pyramid_input(c);
   const MinMaxPyramid p = build_min_max_pyramid(f);
   const bool pot = (c.w & (c.w - 1)) == 0 && (c.h & (c.h - 1)) == 0;
   for (size_t k = 0; k < p.levels.size(); ++k) {
@@ -94,7 +120,19 @@ TEST_P(PyramidBounds, ExactAndConservative) {
 INSTANTIATE_TEST_SUITE_P(Sizes, PyramidBounds,
                          ::testing::Values(PyramidCase{16, 16, Border::clamp}, PyramidCase{16, 8, Border::wrap},
                                            PyramidCase{13, 7, Border::clamp}, PyramidCase{13, 7, Border::wrap},
-                                           PyramidCase{1, 9, Border::clamp}));
+                                           PyramidCase{1, 9, Border::clamp},
+                                           // The sizes (32², 64²): every level's footprint is aligned,
+                                           // so every level is checked for exactness.
+                                           PyramidCase{32, 32, Border::clamp}, PyramidCase{64, 64, Border::wrap},
+                                           PyramidCase{64, 64, Border::clamp, PyramidMap::steps},
+                                           PyramidCase{32, 32, Border::wrap, PyramidMap::steps},
+                                           PyramidCase{64, 64, Border::clamp, PyramidMap::spike},
+                                           PyramidCase{32, 32, Border::wrap, PyramidMap::spike},
+                                           PyramidCase{32, 32, Border::clamp, PyramidMap::zero},
+                                           PyramidCase{64, 64, Border::wrap, PyramidMap::zero},
+                                           PyramidCase{32, 32, Border::wrap, PyramidMap::one},
+                                           PyramidCase{64, 64, Border::clamp, PyramidMap::one}),
+                         pyramid_case_name);
 
 }  // namespace
 }  // namespace meso
