@@ -26,6 +26,7 @@
 // (base.obj, displacement.exr, normal_ts.png and the streams, as `meso bake` / `meso streams`
 // write them, so `meso preview maps/<map>/base.obj --maps maps/<map> --compare` reproduces a
 // point).
+#include "bench_args.hpp"
 #include "meso/core/error.hpp"
 #include "meso/examples/brick_wall.hpp"
 #include "meso/examples/parametric.hpp"
@@ -123,14 +124,6 @@ ReferenceOptions reference_options_of(const Options& o) {
   std::exit(2);
 }
 
-std::vector<std::string> split(const std::string& s) {
-  std::vector<std::string> r;
-  std::stringstream in(s);
-  for (std::string item; std::getline(in, item, ',');)
-    if (!item.empty()) r.push_back(item);
-  return r;
-}
-
 double to_number(const std::string& opt, const std::string& s) {
   char* end = nullptr;
   const double v = std::strtod(s.c_str(), &end);
@@ -195,15 +188,15 @@ Options parse(int argc, char** argv) {
     if (k == "--target") o.target = to_number(k, v);
     if (k == "--uv-tolerance") o.uv_tolerance = to_number(k, v);
     if (k == "--reference-edge") o.reference_edge = to_number(k, v);
-    if (k == "--methods") o.methods = split(v);
+    if (k == "--methods") o.methods = bench::split_commas(v);
     if (k == "--maps") {
-      o.maps = split(v);
+      o.maps = bench::split_commas(v);
       for (const auto& m : o.maps)
         if (m != "rocks" && m != "bricks" && m != "mountains") usage_error("--maps: unknown map '" + m + "'");
     }
     if (k == "--views") {
       o.views.clear();
-      for (const auto& s : split(v)) {
+      for (const auto& s : bench::split_commas(v)) {
         const double a = to_number(k, s);
         if (a < 0 || a > 89.9) usage_error("--views: " + s + " is not in [0, 89.9]");
         o.views.push_back(a);
@@ -211,7 +204,7 @@ Options parse(int argc, char** argv) {
     }
     if (k == "--budgets") {
       o.budgets.clear();
-      for (const auto& s : split(v)) o.budgets.push_back(to_int(k, s, 1, 1 << 16));
+      for (const auto& s : bench::split_commas(v)) o.budgets.push_back(to_int(k, s, 1, 1 << 16));
       std::sort(o.budgets.begin(), o.budgets.end());
       o.budgets.erase(std::unique(o.budgets.begin(), o.budgets.end()), o.budgets.end());
     }

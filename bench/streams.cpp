@@ -15,6 +15,7 @@
 //
 // Exit status: 0, or 1 when the brute-force mode finds a cone wider than the surface allows
 // (or a capped cone where the definition finds a limit), or a child fails; 2 on bad usage.
+#include "bench_args.hpp"
 #include "meso/streams/cone_map.hpp"
 #include "meso/streams/dilation_erosion.hpp"
 #include "meso/streams/distance_field.hpp"
@@ -44,14 +45,6 @@ namespace {
 using bench::BenchMap;
 
 const char* const kStreams[] = {"pyramid", "dilate-erode", "cone", "relaxed-cone", "sdf"};
-
-std::vector<std::string> split(const std::string& s) {
-  std::vector<std::string> out;
-  std::stringstream in(s);
-  for (std::string item; std::getline(in, item, ',');)
-    if (!item.empty()) out.push_back(item);
-  return out;
-}
 
 // A field of /proc/self/status in kB (VmRSS, VmHWM), -1 when absent.
 long status_kb(const char* key) {
@@ -232,17 +225,17 @@ int main(int argc, char** argv) {
     const std::string value = argv[++a];
     if (arg == "--sizes") {
       sizes.clear();
-      for (const std::string& s : split(value)) sizes.push_back(std::atoi(s.c_str()));
+      for (const std::string& s : bench::split_commas(value)) sizes.push_back(std::atoi(s.c_str()));
     } else if (arg == "--maps") {
       maps.clear();
-      for (const std::string& s : split(value)) {
+      for (const std::string& s : bench::split_commas(value)) {
         if (s == "bricks") maps.push_back(BenchMap::bricks);
         else if (s == "noise") maps.push_back(BenchMap::noise);
         else if (s == "bumps") maps.push_back(BenchMap::bumps);
         else return usage();
       }
     } else if (arg == "--streams") {
-      streams = split(value);
+      streams = bench::split_commas(value);
       for (const std::string& s : streams)
         if (std::find(std::begin(kStreams), std::end(kStreams), s) == std::end(kStreams)) return usage();
     } else if (arg == "--radius") {
