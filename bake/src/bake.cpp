@@ -379,7 +379,8 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
     // Anything else (a tie, more hits to follow, no filter support) runs the loop.
     //
     // `probe` < tfar: hits beyond `probe` cannot change the texel's value (see below), so
-    // a ray to `probe` that finds nothing settles it; if it finds something, the whole ray.
+    // a ray to `probe` that finds nothing settles it (with or without filter support); if it
+    // finds something, the whole ray.
     auto collect_first = [&](const Vec3f& org, const Vec3f& dir_s, int way, float tfar, float probe) -> bool {
       if (all_hits || o.ignore_backfaces) return false;
       // Nothing within `probe` (the usual answer): an any-hit query settles it for less than

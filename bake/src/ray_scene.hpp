@@ -117,8 +117,9 @@ class RayScene {
   }
   // Every candidate hit along a ray in [tnear, tfar] and a little beyond the nearest: one
   // traversal that reports each triangle the ray crosses at t in [tnear, min(tfar, t_min +
-  // window)], t_min the nearest such t (a triangle may appear twice: spatial splits). The
-  // values (t, prim, u, v) are those intersect() reports for the same triangle. False when
+  // window)], t_min the nearest such t (a triangle may appear twice: both halves of a quad
+  // hit at its diagonal can be reported as the same triangle, see to_triangle). The values
+  // (t, prim, u, v) are those intersect() reports for the same triangle. False when
   // Embree has no filter functions or more than kMaxCandidates were found: use intersect().
   static constexpr int kMaxCandidates = 16;
   struct Candidate {  // as Hit; no initialisers: only the first n are ever written or read
@@ -200,7 +201,7 @@ class RayScene {
   // Triangles paired into quads (Embree's quad leaves hold twice the triangles of its
   // triangle leaves, and the BVH over half the primitives is shallower and builds faster).
   // Quad q = (v0, v1, v2, v3) is Embree's pair of triangles (v0, v1, v3) and (v2, v3, v1),
-  // the mesh's triangles pair_[q].tri[0] and tri[1] (tri[1] = tri[0] for a triangle left
+  // the mesh's triangles pairs_[q].tri[0] and tri[1] (tri[1] = tri[0] for a triangle left
   // single, stored as (v0, v1, v2, v2): its second triangle is degenerate, never hit).
   // rot[k]: the position, in the triangle's stored corner order, of the quad corner its
   // weights start from (v0 for the first triangle, v2 for the second).
@@ -210,9 +211,13 @@ class RayScene {
   };
   // Embree's hit on quad q at (u, v) as the triangle's hit: its index and its barycentrics
   // (1 - u - v) t0 + u t1 + v t2 over its stored corners. Embree's quad coordinates span
-  // the quad: (0,0) = v0, (1,0) = v1, (1,1) = v2, (0,1) = v3; u + v <= 1 on the first
-  // triangle, where p = v0 + u (v1 - v0) + v (v3 - v0), and on the second
-  // p = v2 + (1 - u)(v3 - v2) + (1 - v)(v1 - v2). On the diagonal both give the same point.
+  // the quad: (0,0) = v0, (1,0) = v1, (1,1) = v2, (0,1) = v3; on the first triangle
+  // p = v0 + u (v1 - v0) + v (v3 - v0), u + v <= 1, and on the second
+  // p = v2 + (1 - u)(v3 - v2) + (1 - v)(v1 - v2), u + v >= 1 (Embree 3.13's quad
+  // intersectors, Pluecker in robust mode). Embree does not say which half it hit, and its
+  // u, v are rounded (an approximate reciprocal, edge tests with a tolerance): a hit within
+  // ~1e-7 of the diagonal may be given to the other half, with weights within ~1e-7 of
+  // [0, 1] and the same point, as Embree itself picks either triangle at a shared edge.
   void to_triangle(uint32_t q, float u, float v, uint32_t& prim, float& tu, float& tv) const {
     const Pair& p = pairs_[q];
     float w[3];  // weights of the triangle's corners, from its quad start corner on

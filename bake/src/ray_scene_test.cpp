@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <random>
 
 namespace meso {
@@ -117,6 +118,42 @@ TEST(RayScene, QuadsHitAsTheirTrianglesWhereFacesStaySingle) {
   const Mesh torus = make_smooth_torus(30, 14);
   const Mesh holed = test::without_faces(torus, [](const Mesh&, FaceHandle f) { return f.idx() % 7 == 3 || f.idx() % 11 == 5; });
   expect_triangle_hits(holed, 3u);
+}
+
+// Two triangles make one quad, whatever corner each face's stored order starts at (the
+// pairing rotates both to the quad's corners): every rotation of both faces gives each hit
+// to its triangle with its barycentrics over the triangle's own stored corners.
+TEST(RayScene, QuadsReportTheirTrianglesInEveryCornerRotation) {
+  const std::array<Vec3f, 4> p = {Vec3f(0, 0, 0), Vec3f(1, 0, 0.1f), Vec3f(1, 1, 0), Vec3f(0, 1, 0.2f)};
+  const std::array<std::array<int, 3>, 2> tris = {{{0, 1, 2}, {0, 2, 3}}};
+  for (int ra = 0; ra < 3; ++ra)
+    for (int rb = 0; rb < 3; ++rb) {
+      Mesh m;
+      std::array<VertexHandle, 4> v;
+      for (int i = 0; i < 4; ++i) v[static_cast<size_t>(i)] = m.add_vertex(p[static_cast<size_t>(i)]);
+      for (int t = 0; t < 2; ++t) {
+        const int r = t == 0 ? ra : rb;
+        const auto& c = tris[static_cast<size_t>(t)];
+        m.add_face(v[static_cast<size_t>(c[static_cast<size_t>(r % 3)])], v[static_cast<size_t>(c[static_cast<size_t>((r + 1) % 3)])],
+                   v[static_cast<size_t>(c[static_cast<size_t>((r + 2) % 3)])]);
+      }
+      const RayScene scene(m, Eigen::Vector3d(0, 0, 0));
+      ASSERT_EQ(scene.quad_count(), 1u);
+      for (uint32_t f = 0; f < 2; ++f) {
+        const uint32_t* t = &scene.arrays().triangles[3 * f];
+        const Eigen::Vector3d c0 = scene.position(t[0]), c1 = scene.position(t[1]), c2 = scene.position(t[2]);
+        const Eigen::Vector3d n = scene.face_normal(f).normalized();
+        for (const auto& w : {std::array<double, 3>{0.2, 0.3, 0.5}, {0.6, 0.1, 0.3}, {0.15, 0.7, 0.15}}) {
+          const Eigen::Vector3d at = w[0] * c0 + w[1] * c1 + w[2] * c2, o = at + 0.5 * n;
+          const RayScene::Hit h = scene.intersect(Vec3f(float(o.x()), float(o.y()), float(o.z())), Vec3f(float(-n.x()), float(-n.y()), float(-n.z())), 0.0f, 1.0f);
+          ASSERT_TRUE(h.valid()) << ra << rb << " face " << f;
+          EXPECT_EQ(h.prim, f) << ra << rb;
+          EXPECT_NEAR(h.t, 0.5, 1e-5) << ra << rb;
+          EXPECT_NEAR(h.u, w[1], 1e-5) << ra << rb << " face " << f;
+          EXPECT_NEAR(h.v, w[2], 1e-5) << ra << rb << " face " << f;
+        }
+      }
+    }
 }
 
 // Robust mode: rays through shared edges (the diagonals inside quads, and the edges between
