@@ -178,6 +178,8 @@ TEST(Cli, BadUsageExitsTwo) {
   EXPECT_EQ(run("streams sdf h.exr -o s.exr --depth 0").code, 2);
   EXPECT_EQ(run("streams cone h.exr -o c.exr --tolerance 0").code, 2);
   EXPECT_EQ(run("preview base.obj --maps d --headless --png p.png --zoom nan").code, 2);
+  EXPECT_EQ(run("preview base.obj --maps d --headless --png p.png --pan 0.5").code, 2) << "--pan takes X,Y";
+  EXPECT_EQ(run("preview base.obj --maps d --headless --png p.png --pan 0.5,inf").code, 2);
   EXPECT_EQ(run("meshreduce in.obj -o out.obj --ratio nan").code, 2);
   EXPECT_EQ(run("streams sdf h.exr -o s.exr --relief inf").code, 2);
 }

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <iostream>
 #include <sstream>
+#include <vector>
 
 namespace meso::cli {
 
@@ -19,6 +20,7 @@ namespace {
 struct Args {
   std::string base, maps, streams, png, size = "512x512", shade = "lit", heatmaps, shadows = "none";
   int turntable = 0;
+  std::vector<float> pan;
   PreviewOptions options;
   bool headless = false, list = false, compare = false;
   int repetitions = 5;
@@ -96,6 +98,10 @@ void add_preview(CLI::App& app, Context& ctx) {
       ->check(CLI::Range(0.0, 89.9) & Finite);
   sub->add_option("--azimuth", args->options.camera.azimuth, "Degrees around the mean normal")->check(Finite);
   sub->add_option("--zoom", args->options.camera.zoom, "Zoom factor (> 1 moves closer)")->check(CLI::PositiveNumber & Finite);
+  sub->add_option("--pan", args->pan, "X,Y: move the view right and up by X and Y framing radii (half the mesh's box diagonal)")
+      ->expected(2)
+      ->delimiter(',')
+      ->check(Finite);
   sub->add_option("--iterations", args->options.iterations, "Main iteration budget of the method")->check(CLI::Range(1, 4096));
   sub->add_option("--shade", args->shade, "lit, uv (visible point's UV in R,G) or height")
       ->check(CLI::IsMember({"lit", "uv", "height"}));
@@ -171,6 +177,10 @@ void add_preview(CLI::App& app, Context& ctx) {
       }
       PreviewOptions o = args->options;
       parse_size(args->size, o.width, o.height);
+      if (!args->pan.empty()) {
+        o.camera.pan_x = args->pan[0];
+        o.camera.pan_y = args->pan[1];
+      }
       o.shade = args->shade == "uv" ? PreviewShade::uv : args->shade == "height" ? PreviewShade::height : PreviewShade::lit;
       o.shadows = args->shadows == "hard" ? PreviewShadows::hard : args->shadows == "soft" ? PreviewShadows::soft : PreviewShadows::none;
       if (args->turntable > 0 && (!args->headless || args->compare)) throw UsageError("preview: --turntable needs --headless (and no --compare)");

@@ -47,12 +47,15 @@ CameraPose frame_camera(const Mesh& base, const PreviewCamera& cam, float aspect
   const double dist = radius / std::sin(0.5 * fov) / std::max(static_cast<double>(cam.zoom), 1e-3);
   const Vec3d side = e1 * std::cos(az) + e2 * std::sin(az);
   const Vec3d to_eye = n * std::cos(a) + side * std::sin(a);
-  const Vec3d eye = center + to_eye * dist;
   // Up: perpendicular to the orbit plane's side direction, so it is never parallel to the view.
   const Vec3d up_hint = e2 * std::cos(az) - e1 * std::sin(az);
-  const Vec3d f = (center - eye).normalize();
+  const Vec3d orbit_eye = center + to_eye * dist;
+  const Vec3d f = (center - orbit_eye).normalize();
   const Vec3d r = OpenMesh::cross(f, up_hint).normalize();
   const Vec3d u = OpenMesh::cross(r, f);
+  // Panning moves the eye, and the point it looks at, across the view (perpendicular to f:
+  // the mesh's depth range below is unchanged).
+  const Vec3d eye = orbit_eye + (r * static_cast<double>(cam.pan_x) + u * static_cast<double>(cam.pan_y)) * radius;
   std::array<float, 16> view{};
   for (int i = 0; i < 3; ++i) {
     view[static_cast<size_t>(i * 4 + 0)] = static_cast<float>(r[i]);

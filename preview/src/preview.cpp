@@ -217,7 +217,7 @@ namespace {
 struct WindowState {
   PreviewOptions options;
   const PreviewMaps* maps;
-  bool dragging = false;
+  bool dragging = false, panning = false;
   double last_x = 0, last_y = 0;
 };
 }  // namespace
@@ -240,16 +240,24 @@ void run_window(const Mesh& base, const PreviewMaps& maps, const PreviewOptions&
   glfwSetWindowUserPointer(window, &state);
   glfwSetMouseButtonCallback(window, [](GLFWwindow* w, int button, int action, int) {
     auto* s = static_cast<WindowState*>(glfwGetWindowUserPointer(w));
-    if (button == GLFW_MOUSE_BUTTON_LEFT) {
-      s->dragging = action == GLFW_PRESS;
-      glfwGetCursorPos(w, &s->last_x, &s->last_y);
-    }
+    if (button == GLFW_MOUSE_BUTTON_LEFT) s->dragging = action == GLFW_PRESS;
+    if (button == GLFW_MOUSE_BUTTON_RIGHT || button == GLFW_MOUSE_BUTTON_MIDDLE) s->panning = action == GLFW_PRESS;
+    glfwGetCursorPos(w, &s->last_x, &s->last_y);
   });
   glfwSetCursorPosCallback(window, [](GLFWwindow* w, double x, double y) {
     auto* s = static_cast<WindowState*>(glfwGetWindowUserPointer(w));
-    if (!s->dragging) return;
-    s->options.camera.azimuth += static_cast<float>(x - s->last_x) * 0.4f;
-    s->options.camera.view_angle = std::clamp(s->options.camera.view_angle + static_cast<float>(y - s->last_y) * 0.3f, 0.0f, 89.9f);
+    if (s->panning) {
+      // The mesh follows the cursor: the view's height at the point looked at is about 2.13
+      // framing radii / zoom (a 40 degree field of view), pan's unit.
+      int width = 0, height = 0;
+      glfwGetWindowSize(w, &width, &height);
+      const float per_pixel = 2.13f / (s->options.camera.zoom * static_cast<float>(std::max(height, 1)));
+      s->options.camera.pan_x -= static_cast<float>(x - s->last_x) * per_pixel;
+      s->options.camera.pan_y += static_cast<float>(y - s->last_y) * per_pixel;
+    } else if (s->dragging) {
+      s->options.camera.azimuth += static_cast<float>(x - s->last_x) * 0.4f;
+      s->options.camera.view_angle = std::clamp(s->options.camera.view_angle + static_cast<float>(y - s->last_y) * 0.3f, 0.0f, 89.9f);
+    }
     s->last_x = x;
     s->last_y = y;
   });

@@ -144,6 +144,36 @@ TEST(Preview, SafeAndRefiningMethodsFindTheCrossingOfALinearRamp) {
   }
 }
 
+// Panning slides the picture: straight on, a flat quad's points all lie at the depth of the
+// point looked at, so the quad moves by pan x cos(20 deg) of the half-width (the framing's
+// 40 degree field of view, zoom 1): left for a positive pan x (the view moves right), and as
+// far across the rows for pan y.
+TEST(Preview, PanSlidesTheViewAcrossTheScreen) {
+  const Mesh quad = test::make_grid(1, 1);
+  const PreviewMaps maps = maps_with_height([](float) { return 0.0f; });
+  auto centroid = [&](float pan_x, float pan_y) {
+    PreviewOptions o;
+    o.method = "bump";
+    o.width = o.height = 64;
+    o.camera.view_angle = 0.0f;
+    o.camera.pan_x = pan_x;
+    o.camera.pan_y = pan_y;
+    const Image img = render_headless(quad, maps, o);
+    double sx = 0, sy = 0, n = 0;
+    for (int y = 0; y < img.height; ++y)
+      for (int x = 0; x < img.width; ++x)
+        if (img.at(x, y, 3) > 0.5f) sx += x, sy += y, n += 1;
+    EXPECT_GT(n, 100);
+    return std::array<double, 2>{sx / n, sy / n};
+  };
+  const auto c0 = centroid(0, 0), c1 = centroid(0.25f, 0), c2 = centroid(0, -0.25f);
+  const double shift = 0.25 * std::cos(20.0 * kPi / 180.0) * 32.0;  // pixels
+  EXPECT_NEAR(c1[0] - c0[0], -shift, 0.5);
+  EXPECT_NEAR(c1[1] - c0[1], 0.0, 0.5);
+  EXPECT_NEAR(c2[0] - c0[0], 0.0, 0.5);
+  EXPECT_NEAR(std::abs(c2[1] - c0[1]), shift, 0.5);
+}
+
 // Every method, straight on and at 89.9 degrees, on a rough height field over a curved base:
 // finite pixels only, and the mesh where it should be.
 TEST(Preview, EveryMethodIsStableStraightOnAndGrazing) {

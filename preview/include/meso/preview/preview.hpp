@@ -92,6 +92,9 @@ struct PreviewCamera {
   float view_angle = 30.0f;
   float azimuth = 0.0f;
   float zoom = 1.0f;  // > 1 moves closer
+  // Pan: the point looked at moves from the mesh's bounding-box centre across the view, right
+  // and up on screen, in units of the framing radius (half the box's diagonal).
+  float pan_x = 0.0f, pan_y = 0.0f;
   // The light, fixed relative to the mesh: degrees above the mean plane, and around the mean
   // normal from the same reference direction as azimuth (the defaults: n + 0.6 e2 - 0.4 e1).
   float light_elevation = 54.20424f;
