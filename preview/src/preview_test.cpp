@@ -851,6 +851,37 @@ TEST(Measure, SearchMethodsAgreeWithTheReference) {
   }
 }
 
+// The lit images agree too where the normal map is not flat: the GPU's tangent frames and
+// normal decoding are the reference's (bake.cpp's conventions: MikkTSpace frames, +Y = +v),
+// so a tilted normal shades the same on both; with the green channel read the other way
+// round, the lit image would differ where the normals lean along v.
+TEST(Measure, LitImagesAgreeWithATiltedNormalMap) {
+  const Mesh quad = test::make_grid(1, 1);
+  PreviewMaps maps = rough_maps_with_sdf();
+  maps.normal_ts = Image(32, 32, 3);
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 32; ++x) {
+      const float nx = 0.5f * std::sin(0.4f * static_cast<float>(x)), ny = 0.6f * std::cos(0.3f * static_cast<float>(y));
+      const float nz = std::sqrt(1.0f - nx * nx - ny * ny);
+      maps.normal_ts.at(x, y, 0) = 0.5f * nx + 0.5f;
+      maps.normal_ts.at(x, y, 1) = 0.5f * ny + 0.5f;
+      maps.normal_ts.at(x, y, 2) = 0.5f * nz + 0.5f;
+    }
+  CompareOptions o;
+  o.methods = {"mesh", "cone", "pyramid"};
+  o.view.width = o.view.height = 96;
+  o.view.camera.view_angle = 30.0f;
+  o.view.camera.azimuth = 35.0f;
+  o.view.camera.zoom = 3.0f;
+  o.view.iterations = 256;
+  o.repetitions = 1;
+  const Comparison c = compare_methods(quad, maps, o);
+  for (const MethodComparison& m : c.methods) {
+    std::printf("%s: wrong hits %.4f, rmse %.5f\n", m.name.c_str(), m.wrong_hit_fraction, m.rmse);
+    EXPECT_LT(m.rmse, 0.01) << m.name;
+  }
+}
+
 // Fetch counts are exact for the fixed-step methods; linear searches fetch more with a larger
 // budget; the methods that stop when they have found the surface do not.
 TEST(Measure, FetchCounts) {
