@@ -3,6 +3,7 @@
 #include "meso/examples/brick_wall.hpp"
 #include "meso/formats/image_io.hpp"
 #include "meso/formats/mesh_io.hpp"
+#include "bumpy_torus.hpp"
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -13,8 +14,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <limits>
+#include <cstring>
 #include <fstream>
+#include <limits>
+#include <utility>
 
 namespace meso {
 namespace {
@@ -1020,6 +1023,14 @@ TEST(CliBake, AHoleFailsTheMissRateCheck) {
   EXPECT_EQ(run(bake_args(dir, "low.obj", "high.obj", "loose", common + "0.3")).code, 0);
 }
 
+// A PNG file's bit depth and colour type (0 grey, 2 RGB), from its IHDR chunk; (-1, -1) when
+// the file is not a PNG.
+std::pair<int, int> png_header(const fs::path& path) {
+  const std::string png = test::read_text(path);
+  if (png.size() < 26 || png.substr(12, 4) != "IHDR") return {-1, -1};
+  return {static_cast<unsigned char>(png[24]), static_cast<unsigned char>(png[25])};
+}
+
 // displacement.png: 16-bit grey, its bias and scale in the metadata equal to the report's,
 // and bias + scale * value reproduces displacement.exr within one step of 16 bits.
 TEST_F(Skeleton, DisplacementPngIs16BitAndDecodesToTheExr) {
@@ -1028,11 +1039,7 @@ TEST_F(Skeleton, DisplacementPngIs16BitAndDecodesToTheExr) {
                        (d / "png16").string() + " --size 64x32 --maps displacement,displacement_png --json");
   ASSERT_EQ(r.code, 0) << r.err;
   const auto report = nlohmann::json::parse(r.out);
-  const std::string png = test::read_text(d / "png16" / "displacement.png");
-  ASSERT_GT(png.size(), 26u);
-  EXPECT_EQ(png.substr(12, 4), "IHDR");
-  EXPECT_EQ(static_cast<int>(static_cast<unsigned char>(png[24])), 16) << "bit depth";
-  EXPECT_EQ(static_cast<int>(static_cast<unsigned char>(png[25])), 0) << "colour type: grey";
+  EXPECT_EQ(png_header(d / "png16" / "displacement.png"), std::make_pair(16, 0)) << "16 bits, colour type grey";
   const Image img = read_image(d / "png16" / "displacement.png"), exr = read_image(d / "png16" / "displacement.exr");
   const float bias = std::stof(std::get<std::string>(img.metadata.at("height_bias")));
   const float scale = std::stof(std::get<std::string>(img.metadata.at("height_scale")));
@@ -1046,6 +1053,101 @@ TEST_F(Skeleton, DisplacementPngIs16BitAndDecodesToTheExr) {
     worst = std::max(worst, std::abs(double(bias) + double(scale) * img.pixels[i] - exr.pixels[i]));
   std::printf("[ displacement.png ] worst |bias + scale v - exr| = %.3g = %.3f of scale/65535\n", worst, worst / (scale / 65535.0));
   EXPECT_LE(worst, scale / 65535.0);
+}
+
+}  // namespace
+}  // namespace meso
+
+namespace meso {
+namespace {
+
+// ---- bake: PNG bit depth, green convention; frames: formats that cannot hold frames; glTF
+// TANGENT values (issue 5, the auditor's gaps) ----
+
+// The identity bake of issue 5 through the command line: high = low, a curved mesh with UV
+// seams and a mirrored half (the library's BakeAccuracy test mesh), normal_ts.png in 8 and in
+// 16 bits: every covered texel decodes to (0, 0, 1) within half an LSB.
+TEST(CliBake, IdentityBakeDecodesToUpWithinHalfAnLsbIn8And16Bits) {
+  test::TempDir dir;
+  Mesh torus = test::BumpyTorus{}.mesh(48, 24);
+  test::mirror_half(torus);
+  write_mesh(torus, dir / "torus.obj");
+  // The premise, as the command sees the file: half the faces' corners mirrored.
+  const Result frames = run("frames " + (dir / "torus.obj").string() + " -o " + (dir / "torus.glb").string() + " --json");
+  ASSERT_EQ(frames.code, 0) << frames.err;
+  EXPECT_EQ(nlohmann::json::parse(frames.out)["mirrored_corners"], 3 * torus.n_faces() / 2);
+  for (const int bits : {8, 16}) {
+    const std::string out = "b" + std::to_string(bits);
+    const Result r = run(bake_args(dir, "torus.obj", "torus.obj", out, "--size 256 --maps normal_ts,coverage --json --png-bits " + std::to_string(bits)));
+    ASSERT_EQ(r.code, 0) << r.err;
+    const auto report = nlohmann::json::parse(r.out);
+    EXPECT_EQ(report["png_bits"], bits);
+    EXPECT_EQ(report["misses"], 0);
+    EXPECT_EQ(png_header(dir / out / "normal_ts.png"), std::make_pair(bits, 2)) << "RGB at the requested depth";
+    EXPECT_EQ(png_header(dir / out / "coverage.png"), std::make_pair(8, 0)) << "coverage stays 8-bit grey";
+    const double max_code = bits == 8 ? 255.0 : 65535.0;
+    const Image normals = read_image(dir / out / "normal_ts.png"), coverage = read_image(dir / out / "coverage.png");
+    const test::UpCodesCheck check = test::check_codes_decode_to_up(test::image_codes(normals, max_code), coverage, max_code, out);
+    EXPECT_EQ(check.checked, report["covered_texels"].get<size_t>());
+    EXPECT_GT(check.checked, 256u * 256u / 2);
+    EXPECT_EQ(check.bad, 0u);
+    std::printf("[ identity cli ] %2d-bit: %zu covered texels, largest code offsets x %.2f y %.2f z %.2f LSB\n", bits, check.checked,
+                check.worst[0], check.worst[1], check.worst[2]);
+  }
+  for (const char* bad : {"--png-bits 12", "--png-bits 0", "--normal-y sideways"}) {
+    const Result r = run(bake_args(dir, "torus.obj", "torus.obj", "bad", std::string("--size 8 ") + bad));
+    EXPECT_EQ(r.code, 2) << bad;
+    EXPECT_NE(r.err.find(std::string(bad).substr(0, std::string(bad).find(' '))), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "bad")) << bad;
+  }
+}
+
+// --normal-y down (Unreal, DirectX: green = -v) writes the default map (up: glTF, Blender,
+// Unity) with y negated, texel for texel, and says so in the maps' metadata and the report.
+// A tilted high plane, so that both x and y of the normals are far from 0.
+TEST(CliBake, NormalYDownNegatesGreenTexelForTexel) {
+  test::TempDir dir;
+  write_mesh(test::make_grid(2, 2), dir / "low.obj");
+  write_mesh(test::make_plane(0.3f, -0.2f, 0.01f), dir / "high.obj");
+  const std::string common = "--size 16 --front 0.5 --back 0.5 --maps normal_ts,normal_ts_exr,normal_os_exr --json";
+  const Result up = run(bake_args(dir, "low.obj", "high.obj", "up", common));
+  const Result down = run(bake_args(dir, "low.obj", "high.obj", "down", common + " --normal-y down"));
+  ASSERT_EQ(up.code, 0) << up.err;
+  ASSERT_EQ(down.code, 0) << down.err;
+  EXPECT_EQ(nlohmann::json::parse(up.out)["normal_y"], "up") << "the default";
+  EXPECT_EQ(nlohmann::json::parse(down.out)["normal_y"], "down");
+  const Image up_exr = read_image(dir / "up" / "normal_ts.exr"), down_exr = read_image(dir / "down" / "normal_ts.exr");
+  const Image up_png = read_image(dir / "up" / "normal_ts.png"), down_png = read_image(dir / "down" / "normal_ts.png");
+  ASSERT_EQ(up_exr.pixels.size(), 16u * 16u * 3u);
+  ASSERT_EQ(down_exr.pixels.size(), up_exr.pixels.size());
+  ASSERT_EQ(down_png.pixels.size(), up_png.pixels.size());
+  const std::vector<long> up_codes = test::image_codes(up_png, 65535), down_codes = test::image_codes(down_png, 65535);
+  // The plane's normal in the grid's tangent space (t = +x, b = +y, n = +z): y = 0.2 / |.|.
+  const float expected_y = 0.2f / std::sqrt(0.3f * 0.3f + 0.2f * 0.2f + 1.0f);
+  for (size_t i = 0; i < 16 * 16; ++i) {
+    ASSERT_NEAR(up_exr.pixels[3 * i + 1], expected_y, 1e-5f) << i;
+    ASSERT_EQ(down_exr.pixels[3 * i + 0], up_exr.pixels[3 * i + 0]) << i;
+    ASSERT_EQ(down_exr.pixels[3 * i + 1], -up_exr.pixels[3 * i + 1]) << i;
+    ASSERT_EQ(down_exr.pixels[3 * i + 2], up_exr.pixels[3 * i + 2]) << i;
+    // Encoded: (y + 1) / 2 and (1 - y) / 2 sum to one, so the codes to 65535 (within the
+    // rounding of a code that falls on a half).
+    ASSERT_EQ(down_codes[3 * i + 0], up_codes[3 * i + 0]) << i;
+    ASSERT_NEAR(down_codes[3 * i + 1] + up_codes[3 * i + 1], 65535, 1) << i;
+    ASSERT_EQ(down_codes[3 * i + 2], up_codes[3 * i + 2]) << i;
+  }
+  for (const Image* m : {&up_exr, &up_png})
+    EXPECT_EQ(std::get<std::string>(m->metadata.at("normal_y")), "up");
+  for (const Image* m : {&down_exr, &down_png}) {
+    EXPECT_EQ(std::get<std::string>(m->metadata.at("normal_y")), "down");
+    EXPECT_NE(std::get<std::string>(m->metadata.at("space")).find("-v"), std::string::npos);
+  }
+  // normal_os.exr: the plane's own normal, and the same bytes whatever the convention.
+  const Image os = read_image(dir / "up" / "normal_os.exr");
+  const float len = std::sqrt(0.3f * 0.3f + 0.2f * 0.2f + 1.0f);
+  const float plane_normal[3] = {-0.3f / len, 0.2f / len, 1.0f / len};
+  ASSERT_EQ(os.pixels.size(), 16u * 16u * 3u);
+  for (size_t i = 0; i < os.pixels.size(); ++i) ASSERT_NEAR(os.pixels[i], plane_normal[i % 3], 1e-5f) << i;
+  EXPECT_EQ(test::read_text(dir / "up" / "normal_os.exr"), test::read_text(dir / "down" / "normal_os.exr"));
 }
 
 }  // namespace
