@@ -1150,5 +1150,98 @@ TEST(CliBake, NormalYDownNegatesGreenTexelForTexel) {
   EXPECT_EQ(test::read_text(dir / "up" / "normal_os.exr"), test::read_text(dir / "down" / "normal_os.exr"));
 }
 
+// frames writes tangents and curvatures, which only glTF holds: an .obj or .ply output would
+// silently drop them, so it is refused as a bad value (exit 2, one line naming the file),
+// before any work, and nothing is written.
+TEST(CliFrames, RefusesOutputsThatCannotHoldFrames) {
+  test::TempDir dir;
+  write_mesh(test::make_grid(2, 2), dir / "grid.obj");
+  for (const char* out : {"x.obj", "x.ply", "X.OBJ"}) {
+    const Result r = run("frames " + (dir / "grid.obj").string() + " -o " + (dir / out).string());
+    EXPECT_EQ(r.code, 2) << out;
+    EXPECT_EQ(lines(r.err), 1u) << r.err;
+    EXPECT_NE(r.err.find(out), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(".gltf or .glb"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / out));
+  }
+  EXPECT_EQ(run("frames " + (dir / "grid.obj").string() + " -o " + (dir / "x.gltf").string()).code, 0);
+}
+
+// One glTF attribute of the first primitive as floats (the buffer embedded as base64, as
+// meso writes it), `components` per vertex.
+std::vector<float> gltf_floats(const nlohmann::json& gltf, const std::string& attribute, int components) {
+  const std::string uri = gltf["buffers"][0]["uri"].get<std::string>();
+  const std::string prefix = "data:application/octet-stream;base64,";
+  EXPECT_EQ(uri.compare(0, prefix.size(), prefix), 0);
+  std::vector<uint8_t> bytes;
+  uint32_t acc = 0;
+  int bits = 0;
+  for (size_t i = prefix.size(); i < uri.size() && uri[i] != '='; ++i) {
+    const char c = uri[i];
+    const int v = c >= 'A' && c <= 'Z' ? c - 'A' : c >= 'a' && c <= 'z' ? c - 'a' + 26 : c >= '0' && c <= '9' ? c - '0' + 52 : c == '+' ? 62 : 63;
+    acc = (acc << 6) | static_cast<uint32_t>(v);
+    bits += 6;
+    if (bits >= 8) {
+      bits -= 8;
+      bytes.push_back(static_cast<uint8_t>(acc >> bits));
+    }
+  }
+  const auto& accessor = gltf["accessors"][gltf["meshes"][0]["primitives"][0]["attributes"][attribute].get<size_t>()];
+  EXPECT_EQ(accessor["componentType"], 5126) << "float";
+  const auto& view = gltf["bufferViews"][accessor["bufferView"].get<size_t>()];
+  const size_t offset = view["byteOffset"].get<size_t>() + accessor.value("byteOffset", size_t(0));
+  const size_t count = accessor["count"].get<size_t>() * static_cast<size_t>(components);
+  std::vector<float> out(count);
+  EXPECT_LE(offset + 4 * count, bytes.size());
+  if (offset + 4 * count <= bytes.size()) std::memcpy(out.data(), bytes.data() + offset, 4 * count);
+  return out;
+}
+
+// glTF TANGENT values through `meso frames -o x.gltf`, read back from the file: a flat grid
+// (UV = xy) has (1, 0, 0, +1) everywhere; the same grid with the right half's u mirrored
+// (u = 1 - x there: the tangent turns to -x, the handedness to -1) keeps (1, 0, 0, +1) on the
+// left and has (-1, 0, 0, -1) on the right, and the vertices on the mirror line, whose UVs
+// are the same on both sides, are split because their tangents differ.
+TEST(CliFrames, GltfTangentsOfAFlatGridAndAMirroredHalf) {
+  test::TempDir dir;
+  const int n = 4;
+  Mesh grid = test::make_grid(n, n);
+  write_mesh(grid, dir / "grid.obj");
+  Mesh mirrored = grid;
+  for (auto f : mirrored.faces()) {
+    float cx = 0;
+    for (auto v : mirrored.fv_range(f)) cx += mirrored.point(v)[0] / 3.0f;
+    if (cx > 0.5f)
+      for (auto h : face_halfedges(mirrored, f)) {
+        const Vec2f uv = mirrored.texcoord2D(h);
+        mirrored.set_texcoord2D(h, Vec2f(1.0f - uv[0], uv[1]));
+      }
+  }
+  write_mesh(mirrored, dir / "mirrored.obj");
+  for (const char* name : {"grid", "mirrored"}) {
+    SCOPED_TRACE(name);
+    const Result r = run("frames " + (dir / (std::string(name) + ".obj")).string() + " -o " + (dir / (std::string(name) + ".gltf")).string());
+    ASSERT_EQ(r.code, 0) << r.err;
+    const auto gltf = nlohmann::json::parse(test::read_text(dir / (std::string(name) + ".gltf")));
+    const std::vector<float> tangent = gltf_floats(gltf, "TANGENT", 4), position = gltf_floats(gltf, "POSITION", 3);
+    const size_t vertices = position.size() / 3;
+    ASSERT_EQ(tangent.size(), 4 * vertices);
+    const bool mirror = std::string(name) == "mirrored";
+    // (n + 1)^2 grid vertices; the mirrored grid adds a copy of the n + 1 on the line x = 1/2.
+    EXPECT_EQ(vertices, static_cast<size_t>((n + 1) * (n + 1) + (mirror ? n + 1 : 0)));
+    size_t plain = 0, flipped = 0;
+    for (size_t i = 0; i < vertices; ++i) {
+      const float x = position[3 * i];
+      const float* t = &tangent[4 * i];
+      const bool right = mirror && (x > 0.5f || (x == 0.5f && t[3] < 0));
+      const float want[4] = {right ? -1.0f : 1.0f, 0.0f, 0.0f, right ? -1.0f : 1.0f};
+      for (int c = 0; c < 4; ++c) EXPECT_NEAR(t[c], want[c], 1e-6f) << "vertex " << i << " at x = " << x << ", component " << c;
+      (t[3] < 0 ? flipped : plain) += 1;
+    }
+    EXPECT_EQ(plain, static_cast<size_t>(mirror ? (n + 1) * (n / 2 + 1) : (n + 1) * (n + 1)));
+    EXPECT_EQ(flipped, static_cast<size_t>(mirror ? (n + 1) * (n / 2 + 1) : 0));
+  }
+}
+
 }  // namespace
 }  // namespace meso
