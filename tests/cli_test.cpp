@@ -1245,3 +1245,185 @@ TEST(CliFrames, GltfTangentsOfAFlatGridAndAMirroredHalf) {
 
 }  // namespace
 }  // namespace meso
+
+namespace meso {
+namespace {
+
+// ---- bake: the options tested only in the library until now, through the command line ----
+
+// A cage leaning (0.02, 0, 0.05) away from a flat base: rays run toward it (distances along
+// the leaning ray: a layer 0.01 up is 0.01 * slant away) and stop at it (a layer at 0.06, past
+// the cage's 0.05, is out of reach: every texel misses, where without the cage all hit).
+TEST(CliBake, CageLeansTheRaysAndBoundsTheirReach) {
+  test::TempDir dir;
+  const Mesh base = test::make_grid(2, 2);
+  Mesh cage_mesh = base;
+  for (auto v : cage_mesh.vertices()) cage_mesh.set_point(v, cage_mesh.point(v) + Vec3f(0.02f, 0.0f, 0.05f));
+  write_mesh(base, dir / "low.obj");
+  write_mesh(cage_mesh, dir / "cage.obj");
+  write_mesh(test::make_layers({{0.01f, true}}), dir / "near.obj");
+  write_mesh(test::make_layers({{0.06f, true}}), dir / "far.obj");
+  write_mesh(test::make_grid(3, 2), dir / "other.obj");
+  const std::string common = "--size 8 --front 0.2 --back 0.2 --maps displacement --json";
+  const std::string cage = " --cage " + (dir / "cage.obj").string();
+  const double slant = std::sqrt(0.02 * 0.02 + 0.05 * 0.05) / 0.05;  // ray length per unit height
+  const Result near = run(bake_args(dir, "low.obj", "near.obj", "near", common + cage));
+  ASSERT_EQ(near.code, 0) << near.err;
+  const auto near_report = nlohmann::json::parse(near.out);
+  EXPECT_EQ(near_report["misses"], 0);
+  EXPECT_EQ(near_report["cage"], (dir / "cage.obj").string());
+  EXPECT_NEAR(near_report["displacement_min"].get<double>(), 0.01 * slant, 1e-5);
+  EXPECT_NEAR(near_report["displacement_max"].get<double>(), 0.01 * slant, 1e-5);
+  const Result far = run(bake_args(dir, "low.obj", "far.obj", "far", common + cage));
+  ASSERT_EQ(far.code, 0) << far.err;
+  const auto far_report = nlohmann::json::parse(far.out);
+  EXPECT_EQ(far_report["hits"], 0) << "the layer past the cage is out of reach";
+  EXPECT_EQ(far_report["misses"], far_report["covered_texels"]);
+  const Result free = run(bake_args(dir, "low.obj", "far.obj", "free", common));
+  ASSERT_EQ(free.code, 0) << free.err;
+  EXPECT_EQ(nlohmann::json::parse(free.out)["misses"], 0) << "without the cage the front reach (0.2) finds it";
+  EXPECT_NEAR(nlohmann::json::parse(free.out)["displacement_min"].get<double>(), 0.06, 1e-5);
+  // A cage must have the base's topology: a bad input naming the cage, nothing written.
+  const Result bad = run(bake_args(dir, "low.obj", "near.obj", "bad", common + " --cage " + (dir / "other.obj").string()));
+  EXPECT_EQ(bad.code, 3);
+  EXPECT_EQ(lines(bad.err), 1u) << bad.err;
+  EXPECT_NE(bad.err.find("other.obj"), std::string::npos) << bad.err;
+  EXPECT_FALSE(fs::exists(dir / "bad"));
+}
+
+// --basis pn: a coarse sphere band (12 sides, radial normals in the file) over a fine one. The
+// flat triangles sit well inside the sphere; the PN patches built from the normals follow it
+// far more closely (the report's displacement range over hits, --dilate 0).
+TEST(CliBake, PnBasisFollowsTheCurvedSurface) {
+  test::TempDir dir;
+  auto sphere = [](int columns, int rows) {
+    Mesh m = test::make_parametric(
+        columns, rows,
+        [](double s, double t) {
+          const double a = 2 * M_PI * s, b = M_PI * (0.15 + 0.7 * t);  // a band, away from the poles
+          return Vec3f(static_cast<float>(std::sin(b) * std::cos(a)), static_cast<float>(std::sin(b) * std::sin(a)), static_cast<float>(std::cos(b)));
+        },
+        true, false);
+    for (auto v : m.vertices()) m.set_normal(v, m.point(v).normalized());
+    return m;
+  };
+  write_mesh(sphere(12, 4), dir / "low.obj");
+  write_mesh(sphere(128, 48), dir / "high.obj");
+  auto worst = [&](const std::string& basis) {
+    const Result r = run(bake_args(dir, "low.obj", "high.obj", basis, "--size 64 --dilate 0 --maps displacement --json --basis " + basis));
+    EXPECT_EQ(r.code, 0) << r.err;
+    if (r.code != 0) return -1.0;
+    const auto report = nlohmann::json::parse(r.out);
+    EXPECT_EQ(report["basis"], basis);
+    EXPECT_EQ(report["misses"], 0);
+    return std::max(std::abs(report["displacement_min"].get<double>()), std::abs(report["displacement_max"].get<double>()));
+  };
+  const double linear = worst("linear"), pn = worst("pn");
+  EXPECT_GT(linear, 0.02) << "the flat triangles of a 12-sided band are far inside";
+  EXPECT_LT(pn, 0.2 * linear) << "linear " << linear << ", pn " << pn;
+  EXPECT_EQ(run(bake_args(dir, "low.obj", "high.obj", "bad", "--size 8 --basis cubic")).code, 2);
+}
+
+// --detail BUMP --detail-scale S: a sine across the high plane's u (u = (x + 0.5) / 2) adds
+// S (b - 1/2) to the displacement and tilts the normals by its slope, in displacement.exr,
+// normal_ts.exr and normal_os.exr; twice the scale, twice the height. A high mesh without
+// UVs cannot carry the bump (bad input).
+TEST(CliBake, DetailBumpAddsItsScaledHeightAndTiltsTheNormals) {
+  test::TempDir dir;
+  write_mesh(test::make_grid(2, 2), dir / "low.obj");
+  write_mesh(test::make_plane(0, 0, 0), dir / "high.obj");
+  Image bump(64, 1, 1);
+  for (int x = 0; x < 64; ++x) bump.at(x, 0) = static_cast<float>(0.5 + 0.5 * std::sin(2 * M_PI * (x + 0.5) / 64));
+  write_image(bump, dir / "bump.exr", PixelFormat::float32);
+  const std::string common = "--size 16 --front 0.05 --back 0.05 --maps displacement,normal_ts_exr,normal_os_exr --detail " + (dir / "bump.exr").string();
+  for (const double scale : {0.01, 0.02}) {
+    const std::string out = scale == 0.01 ? "default" : "double";
+    const Result r = run(bake_args(dir, "low.obj", "high.obj", out, common + (scale == 0.01 ? "" : " --detail-scale 0.02")));
+    ASSERT_EQ(r.code, 0) << r.err;
+    const Image disp = read_image(dir / out / "displacement.exr"), ts = read_image(dir / out / "normal_ts.exr"),
+                os = read_image(dir / out / "normal_os.exr");
+    for (int x = 2; x < 14; ++x) {
+      const double u_high = ((x + 0.5) / 16 + 0.5) / 2;
+      const double height = scale * 0.5 * std::sin(2 * M_PI * u_high);
+      const double slope = scale * 0.5 * 2 * M_PI * std::cos(2 * M_PI * u_high) / 2;  // per unit x
+      const double nx = -slope / std::sqrt(1 + slope * slope);
+      EXPECT_NEAR(disp.at(x, 8), height, 2e-4 * scale / 0.01) << out << " " << x;
+      EXPECT_NEAR(os.at(x, 8, 0), nx, 2e-3) << out << " " << x;
+      EXPECT_NEAR(ts.at(x, 8, 0), nx, 2e-3) << out << " " << x << ": the grid's tangent is +x";
+    }
+  }
+  test::write_text(dir / "nouv.obj", "v -1 -1 0.01\nv 2 -1 0.01\nv 2 2 0.01\nv -1 2 0.01\nf 1 2 3\nf 1 3 4\n");
+  const Result no_uvs = run(bake_args(dir, "low.obj", "nouv.obj", "bad", common));
+  EXPECT_EQ(no_uvs.code, 3) << no_uvs.err;
+  EXPECT_NE(no_uvs.err.find("nouv.obj"), std::string::npos) << no_uvs.err;
+  EXPECT_FALSE(fs::exists(dir / "bad"));
+}
+
+// An OBJ object `name`: the rectangle [x0, x1] x [y0, y1] at height z (two triangles, facing
+// +z), with UV = (x, y) when `uv`; `first` is the 1-based index of its first vertex.
+std::string rect_obj(const std::string& name, float x0, float x1, float y0, float y1, float z, int first, bool uv) {
+  std::string s = "o " + name + "\n";
+  const float xs[4] = {x0, x1, x1, x0}, ys[4] = {y0, y0, y1, y1};
+  for (int k = 0; k < 4; ++k) {
+    s += "v " + std::to_string(xs[k]) + " " + std::to_string(ys[k]) + " " + std::to_string(z) + "\n";
+    if (uv) s += "vt " + std::to_string(xs[k]) + " " + std::to_string(ys[k]) + "\n";
+  }
+  auto corner = [&](int k) {
+    const std::string i = std::to_string(first + k);
+    return uv ? i + "/" + i : i;
+  };
+  return s + "f " + corner(0) + " " + corner(1) + " " + corner(2) + "\nf " + corner(0) + " " + corner(2) + " " + corner(3) + "\n";
+}
+
+// --match-by-name: the base's "Box_low" (left half) and "Plate_LP.001" (right half) each see
+// only their high part: box_high 0.01 above everything, plate_high 0.02 below everything.
+// Unpaired, the plate's texels take the nearer box surface; paired, their own plate.
+TEST(CliBake, MatchByNameKeepsRaysOffTheNeighbouringPart) {
+  test::TempDir dir;
+  test::write_text(dir / "low.obj", rect_obj("Box_low", 0, 0.5f, 0, 1, 0, 1, true) + rect_obj("Plate_LP.001", 0.5f, 1, 0, 1, 0, 5, true));
+  test::write_text(dir / "high.obj", rect_obj("box_high", -1, 2, -1, 2, 0.01f, 1, false) + rect_obj("plate_high", -1, 2, -1, 2, -0.02f, 5, false));
+  const std::string common = "--size 8 --front 0.05 --back 0.05 --maps displacement --json";
+  const Result paired = run(bake_args(dir, "low.obj", "high.obj", "paired", common + " --match-by-name"));
+  ASSERT_EQ(paired.code, 0) << paired.err;
+  const auto report = nlohmann::json::parse(paired.out);
+  EXPECT_EQ(report["matched_parts"], nlohmann::json::array({"Box_low", "Plate_LP.001"}));
+  EXPECT_TRUE(report["unmatched_parts"].empty());
+  const Image disp = read_image(dir / "paired" / "displacement.exr");
+  for (int y = 0; y < 8; ++y) {
+    EXPECT_NEAR(disp.at(1, y), 0.01f, 1e-6f) << "box texel";
+    EXPECT_NEAR(disp.at(6, y), -0.02f, 1e-6f) << "plate texel: the nearer box surface is not its part";
+  }
+  const Result unpaired = run(bake_args(dir, "low.obj", "high.obj", "unpaired", common));
+  ASSERT_EQ(unpaired.code, 0) << unpaired.err;
+  EXPECT_NEAR(read_image(dir / "unpaired" / "displacement.exr").at(6, 4), 0.01f, 1e-6f) << "unpaired, the nearest wins";
+  // A base part without a high partner sees the whole high mesh, with a warning and in the report.
+  test::write_text(dir / "other.obj", rect_obj("box_high", -1, 2, -1, 2, 0.01f, 1, false) + rect_obj("other_high", -1, 2, -1, 2, -0.02f, 5, false));
+  const Result partial = run(bake_args(dir, "low.obj", "other.obj", "partial", common + " --match-by-name"));
+  ASSERT_EQ(partial.code, 0) << partial.err;
+  EXPECT_EQ(nlohmann::json::parse(partial.out)["unmatched_parts"], nlohmann::json::array({"Plate_LP.001"}));
+  EXPECT_NE(partial.err.find("no high part of the same name"), std::string::npos) << partial.err;
+  EXPECT_NEAR(read_image(dir / "partial" / "displacement.exr").at(6, 4), 0.01f, 1e-6f);
+}
+
+// --front/--back as percentages resolve against the high mesh's bounding-box diagonal, and
+// the default reach is 5 % of it, both ways (the report's front and back, object units).
+TEST(CliBake, PercentReachResolvesAgainstTheHighDiagonal) {
+  test::TempDir dir;
+  write_mesh(test::make_grid(2, 2), dir / "low.obj");
+  write_mesh(test::make_plane(0.3f, -0.2f, 0.01f), dir / "high.obj");
+  const float diagonal = bounding_box(read_mesh(dir / "high.obj")).diagonal();
+  ASSERT_GT(diagonal, 2.8f) << "[-0.5, 1.5]^2, tilted";
+  const std::string common = "--size 4 --maps displacement --json";
+  const auto percent = nlohmann::json::parse(run(bake_args(dir, "low.obj", "high.obj", "p", common + " --front 4% --back 2.5%")).out);
+  EXPECT_NEAR(percent["front"].get<double>(), 0.04 * diagonal, 1e-6 * diagonal);
+  EXPECT_NEAR(percent["back"].get<double>(), 0.025 * diagonal, 1e-6 * diagonal);
+  const auto defaults = nlohmann::json::parse(run(bake_args(dir, "low.obj", "high.obj", "d", common)).out);
+  EXPECT_NEAR(defaults["front"].get<double>(), 0.05 * diagonal, 1e-6 * diagonal);
+  EXPECT_NEAR(defaults["back"].get<double>(), 0.05 * diagonal, 1e-6 * diagonal);
+  const auto units = nlohmann::json::parse(run(bake_args(dir, "low.obj", "high.obj", "u", common + " --front 0.3 --back 0.125")).out);
+  EXPECT_NEAR(units["front"].get<double>(), 0.3, 1e-7) << "object units, not a fraction";
+  EXPECT_NEAR(units["back"].get<double>(), 0.125, 1e-7);
+}
+
+}  // namespace
+}  // namespace meso
