@@ -53,11 +53,12 @@ void add_frames(CLI::App& app, Context& ctx) {
       store_tangents(mesh, frames);
       const auto curvature = fit_curvature(mesh);
       store_curvature(mesh, curvature);
-      size_t unfit = 0, two_ring = 0;
+      size_t unfit = 0, two_ring = 0, three_ring = 0;
       float k_lo = 0, k_hi = 0;
       for (const auto& c : curvature) {
         unfit += c.rings == 0;
         two_ring += c.rings == 2;
+        three_ring += c.rings == 3;
         k_lo = std::min(k_lo, c.k2);
         k_hi = std::max(k_hi, c.k1);
       }
@@ -79,7 +80,7 @@ void add_frames(CLI::App& app, Context& ctx) {
                 {"input", in_report},
                 {"output", args->output},
                 {"mirrored_corners", mirrored},
-                {"curvature", {{"min", k_lo}, {"max", k_hi}, {"two_ring_vertices", two_ring}, {"unfit_vertices", unfit}}}};
+                {"curvature", {{"min", k_lo}, {"max", k_hi}, {"two_ring_vertices", two_ring}, {"three_ring_vertices", three_ring}, {"unfit_vertices", unfit}}}};
       if (want_map)
         report["curvature_map"] = {{"output", args->curvature_map},
                                    {"width", map_options.width},

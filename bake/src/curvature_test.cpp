@@ -161,6 +161,57 @@ TEST(Curvature, HighValenceVerticesFitTheOneRingOthersTheTwoRing) {
   EXPECT_LT(worst_other, 0.04);
 }
 
+// A patch of a sphere with a stalk: below the patch's rows, only one column of quads, `rows`
+// long. The stalk's end vertices have a 1-ring of 2 or 3 and a 2-ring of 5 or 6 vertices in
+// two columns (u^2 and u cannot be told apart: no fit); with a stalk 2 quads long their
+// 3-ring reaches into the patch and determines the fit (before the 3-ring they had no
+// curvature). With 3 quads, the 3-ring is still the two columns: no fit, zero curvature.
+Mesh sphere_patch_with_stalk(double r, int n, int rows) {
+  const Mesh full = test::make_parametric(
+      n, n,
+      [&](double s, double t) {
+        const double th = 0.6 + 0.5 * t, ph = 0.5 * s;
+        return Vec3f(float(r * std::sin(th) * std::cos(ph)), float(r * std::sin(th) * std::sin(ph)), float(-r * std::cos(th)));
+      },
+      false, false);
+  // make_parametric's cell (i, j) is faces 2 (j n + i) and the next.
+  return test::without_faces(full, [&](const Mesh&, FaceHandle f) {
+    const int cell = f.idx() / 2, i = cell % n, j = cell / n;
+    return j < rows && i != n / 2;
+  });
+}
+
+TEST(Curvature, ATwoRingTooSmallWidensToTheThreeRing) {
+  const double r = 1.5;
+  const float end_z = static_cast<float>(-r * std::cos(0.6));  // the stalk's end: t = 0
+  const Mesh m = sphere_patch_with_stalk(r, 16, 2);
+  const auto c = fit_curvature(m);
+  size_t ends = 0;
+  for (auto v : m.vertices()) {
+    const auto& k = c[static_cast<size_t>(v.idx())];
+    if (std::abs(m.point(v)[2] - end_z) > 1e-6f) {
+      EXPECT_EQ(k.rings, 2) << "vertex " << v.idx() << " off the stalk's end";
+      continue;
+    }
+    ++ends;
+    EXPECT_EQ(k.rings, 3) << "vertex " << v.idx() << ", valence " << m.valence(v);
+    EXPECT_NEAR(k.k1, 1 / r, 0.005 / r) << "vertex " << v.idx() << ": measured 0.2 % off";
+    EXPECT_NEAR(k.k2, 1 / r, 0.005 / r) << "vertex " << v.idx();
+  }
+  EXPECT_EQ(ends, 2u);
+  // A stalk 3 quads long: its end's 3-ring is still two columns; no fit, zero curvature.
+  const Mesh longer = sphere_patch_with_stalk(r, 16, 3);
+  const auto cl = fit_curvature(longer);
+  size_t unfit = 0;
+  for (auto v : longer.vertices())
+    if (std::abs(longer.point(v)[2] - end_z) <= 1e-6f) {
+      EXPECT_EQ(cl[static_cast<size_t>(v.idx())].rings, 0);
+      EXPECT_EQ(cl[static_cast<size_t>(v.idx())].k1, 0.0f);
+      ++unfit;
+    }
+  EXPECT_EQ(unfit, 2u);
+}
+
 TEST(Curvature, TooFewNeighboursGiveNoFit) {
   Mesh m;
   const auto a = m.add_vertex(Vec3f(0, 0, 0)), b = m.add_vertex(Vec3f(1, 0, 0)), d = m.add_vertex(Vec3f(0, 1, 0));
