@@ -1253,7 +1253,8 @@ namespace {
 
 // A cage leaning (0.02, 0, 0.05) away from a flat base: rays run toward it (distances along
 // the leaning ray: a layer 0.01 up is 0.01 * slant away) and stop at it (a layer at 0.06, past
-// the cage's 0.05, is out of reach: every texel misses, where without the cage all hit).
+// the cage's 0.05, is out of reach: every texel misses, although --front 0.2 would reach it
+// along the normal: Bake.CageSetsTheRaysDirectionAndOutwardReach).
 TEST(CliBake, CageLeansTheRaysAndBoundsTheirReach) {
   test::TempDir dir;
   const Mesh base = test::make_grid(2, 2);
@@ -1279,10 +1280,6 @@ TEST(CliBake, CageLeansTheRaysAndBoundsTheirReach) {
   const auto far_report = nlohmann::json::parse(far.out);
   EXPECT_EQ(far_report["hits"], 0) << "the layer past the cage is out of reach";
   EXPECT_EQ(far_report["misses"], far_report["covered_texels"]);
-  const Result free = run(bake_args(dir, "low.obj", "far.obj", "free", common));
-  ASSERT_EQ(free.code, 0) << free.err;
-  EXPECT_EQ(nlohmann::json::parse(free.out)["misses"], 0) << "without the cage the front reach (0.2) finds it";
-  EXPECT_NEAR(nlohmann::json::parse(free.out)["displacement_min"].get<double>(), 0.06, 1e-5);
   // A cage must have the base's topology: a bad input naming the cage, nothing written.
   const Result bad = run(bake_args(dir, "low.obj", "near.obj", "bad", common + " --cage " + (dir / "other.obj").string()));
   EXPECT_EQ(bad.code, 3);
@@ -1326,8 +1323,8 @@ TEST(CliBake, PnBasisFollowsTheCurvedSurface) {
 
 // --detail BUMP --detail-scale S: a sine across the high plane's u (u = (x + 0.5) / 2) adds
 // S (b - 1/2) to the displacement and tilts the normals by its slope, in displacement.exr,
-// normal_ts.exr and normal_os.exr; twice the scale, twice the height. A high mesh without
-// UVs cannot carry the bump (bad input).
+// normal_ts.exr and normal_os.exr, at S = 0.02 (twice the default: a scale ignored would show).
+// A high mesh without UVs cannot carry the bump (bad input).
 TEST(CliBake, DetailBumpAddsItsScaledHeightAndTiltsTheNormals) {
   test::TempDir dir;
   write_mesh(test::make_grid(2, 2), dir / "low.obj");
@@ -1336,21 +1333,19 @@ TEST(CliBake, DetailBumpAddsItsScaledHeightAndTiltsTheNormals) {
   for (int x = 0; x < 64; ++x) bump.at(x, 0) = static_cast<float>(0.5 + 0.5 * std::sin(2 * M_PI * (x + 0.5) / 64));
   write_image(bump, dir / "bump.exr", PixelFormat::float32);
   const std::string common = "--size 16 --front 0.05 --back 0.05 --maps displacement,normal_ts_exr,normal_os_exr --detail " + (dir / "bump.exr").string();
-  for (const double scale : {0.01, 0.02}) {
-    const std::string out = scale == 0.01 ? "default" : "double";
-    const Result r = run(bake_args(dir, "low.obj", "high.obj", out, common + (scale == 0.01 ? "" : " --detail-scale 0.02")));
-    ASSERT_EQ(r.code, 0) << r.err;
-    const Image disp = read_image(dir / out / "displacement.exr"), ts = read_image(dir / out / "normal_ts.exr"),
-                os = read_image(dir / out / "normal_os.exr");
-    for (int x = 2; x < 14; ++x) {
-      const double u_high = ((x + 0.5) / 16 + 0.5) / 2;
-      const double height = scale * 0.5 * std::sin(2 * M_PI * u_high);
-      const double slope = scale * 0.5 * 2 * M_PI * std::cos(2 * M_PI * u_high) / 2;  // per unit x
-      const double nx = -slope / std::sqrt(1 + slope * slope);
-      EXPECT_NEAR(disp.at(x, 8), height, 2e-4 * scale / 0.01) << out << " " << x;
-      EXPECT_NEAR(os.at(x, 8, 0), nx, 2e-3) << out << " " << x;
-      EXPECT_NEAR(ts.at(x, 8, 0), nx, 2e-3) << out << " " << x << ": the grid's tangent is +x";
-    }
+  const double scale = 0.02;
+  const Result r = run(bake_args(dir, "low.obj", "high.obj", "scaled", common + " --detail-scale 0.02"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  const Image disp = read_image(dir / "scaled" / "displacement.exr"), ts = read_image(dir / "scaled" / "normal_ts.exr"),
+              os = read_image(dir / "scaled" / "normal_os.exr");
+  for (int x = 2; x < 14; ++x) {
+    const double u_high = ((x + 0.5) / 16 + 0.5) / 2;
+    const double height = scale * 0.5 * std::sin(2 * M_PI * u_high);
+    const double slope = scale * 0.5 * 2 * M_PI * std::cos(2 * M_PI * u_high) / 2;  // per unit x
+    const double nx = -slope / std::sqrt(1 + slope * slope);
+    EXPECT_NEAR(disp.at(x, 8), height, 4e-4) << x;
+    EXPECT_NEAR(os.at(x, 8, 0), nx, 2e-3) << x;
+    EXPECT_NEAR(ts.at(x, 8, 0), nx, 2e-3) << x << ": the grid's tangent is +x";
   }
   test::write_text(dir / "nouv.obj", "v -1 -1 0.01\nv 2 -1 0.01\nv 2 2 0.01\nv -1 2 0.01\nf 1 2 3\nf 1 3 4\n");
   const Result no_uvs = run(bake_args(dir, "low.obj", "nouv.obj", "bad", common));
@@ -1377,7 +1372,8 @@ std::string rect_obj(const std::string& name, float x0, float x1, float y0, floa
 
 // --match-by-name: the base's "Box_low" (left half) and "Plate_LP.001" (right half) each see
 // only their high part: box_high 0.01 above everything, plate_high 0.02 below everything.
-// Unpaired, the plate's texels take the nearer box surface; paired, their own plate.
+// Paired, the plate's texels take their own plate, not the nearer box surface that the
+// nearest rule picks unpaired (Bake.MatchByNamePairsParts).
 TEST(CliBake, MatchByNameKeepsRaysOffTheNeighbouringPart) {
   test::TempDir dir;
   test::write_text(dir / "low.obj", rect_obj("Box_low", 0, 0.5f, 0, 1, 0, 1, true) + rect_obj("Plate_LP.001", 0.5f, 1, 0, 1, 0, 5, true));
@@ -1393,9 +1389,6 @@ TEST(CliBake, MatchByNameKeepsRaysOffTheNeighbouringPart) {
     EXPECT_NEAR(disp.at(1, y), 0.01f, 1e-6f) << "box texel";
     EXPECT_NEAR(disp.at(6, y), -0.02f, 1e-6f) << "plate texel: the nearer box surface is not its part";
   }
-  const Result unpaired = run(bake_args(dir, "low.obj", "high.obj", "unpaired", common));
-  ASSERT_EQ(unpaired.code, 0) << unpaired.err;
-  EXPECT_NEAR(read_image(dir / "unpaired" / "displacement.exr").at(6, 4), 0.01f, 1e-6f) << "unpaired, the nearest wins";
   // A base part without a high partner sees the whole high mesh, with a warning and in the report.
   test::write_text(dir / "other.obj", rect_obj("box_high", -1, 2, -1, 2, 0.01f, 1, false) + rect_obj("other_high", -1, 2, -1, 2, -0.02f, 5, false));
   const Result partial = run(bake_args(dir, "low.obj", "other.obj", "partial", common + " --match-by-name"));
@@ -1420,9 +1413,6 @@ TEST(CliBake, PercentReachResolvesAgainstTheHighDiagonal) {
   const auto defaults = nlohmann::json::parse(run(bake_args(dir, "low.obj", "high.obj", "d", common)).out);
   EXPECT_NEAR(defaults["front"].get<double>(), 0.05 * diagonal, 1e-6 * diagonal);
   EXPECT_NEAR(defaults["back"].get<double>(), 0.05 * diagonal, 1e-6 * diagonal);
-  const auto units = nlohmann::json::parse(run(bake_args(dir, "low.obj", "high.obj", "u", common + " --front 0.3 --back 0.125")).out);
-  EXPECT_NEAR(units["front"].get<double>(), 0.3, 1e-7) << "object units, not a fraction";
-  EXPECT_NEAR(units["back"].get<double>(), 0.125, 1e-7);
 }
 
 }  // namespace
