@@ -1066,7 +1066,8 @@ namespace {
 
 // The identity bake of issue 5 through the command line: high = low, a curved mesh with UV
 // seams and a mirrored half (the library's BakeAccuracy test mesh), normal_ts.png in 8 and in
-// 16 bits: every covered texel decodes to (0, 0, 1) within half an LSB.
+// 16 bits: every covered texel decodes to (0, 0, 1) within half an LSB. displacement.png
+// follows --png-bits too; coverage.png stays 8-bit.
 TEST(CliBake, IdentityBakeDecodesToUpWithinHalfAnLsbIn8And16Bits) {
   test::TempDir dir;
   Mesh torus = test::BumpyTorus{}.mesh(48, 24);
@@ -1078,12 +1079,13 @@ TEST(CliBake, IdentityBakeDecodesToUpWithinHalfAnLsbIn8And16Bits) {
   EXPECT_EQ(nlohmann::json::parse(frames.out)["mirrored_corners"], 3 * torus.n_faces() / 2);
   for (const int bits : {8, 16}) {
     const std::string out = "b" + std::to_string(bits);
-    const Result r = run(bake_args(dir, "torus.obj", "torus.obj", out, "--size 256 --maps normal_ts,coverage --json --png-bits " + std::to_string(bits)));
+    const Result r = run(bake_args(dir, "torus.obj", "torus.obj", out, "--size 256 --maps normal_ts,displacement_png,coverage --json --png-bits " + std::to_string(bits)));
     ASSERT_EQ(r.code, 0) << r.err;
     const auto report = nlohmann::json::parse(r.out);
     EXPECT_EQ(report["png_bits"], bits);
     EXPECT_EQ(report["misses"], 0);
     EXPECT_EQ(png_header(dir / out / "normal_ts.png"), std::make_pair(bits, 2)) << "RGB at the requested depth";
+    EXPECT_EQ(png_header(dir / out / "displacement.png"), std::make_pair(bits, 0)) << "grey at the requested depth";
     EXPECT_EQ(png_header(dir / out / "coverage.png"), std::make_pair(8, 0)) << "coverage stays 8-bit grey";
     const double max_code = bits == 8 ? 255.0 : 65535.0;
     const Image normals = read_image(dir / out / "normal_ts.png"), coverage = read_image(dir / out / "coverage.png");
