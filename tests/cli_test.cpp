@@ -3,6 +3,7 @@
 #include "meso/examples/brick_wall.hpp"
 #include "meso/formats/image_io.hpp"
 #include "meso/formats/mesh_io.hpp"
+#include "bumpy_torus.hpp"
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -13,8 +14,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <limits>
+#include <cstring>
 #include <fstream>
+#include <limits>
+#include <utility>
 
 namespace meso {
 namespace {
@@ -1022,6 +1025,14 @@ TEST(CliBake, AHoleFailsTheMissRateCheck) {
   EXPECT_EQ(run(bake_args(dir, "low.obj", "high.obj", "loose", common + "0.3")).code, 0);
 }
 
+// A PNG file's bit depth and colour type (0 grey, 2 RGB), from its IHDR chunk; (-1, -1) when
+// the file is not a PNG.
+std::pair<int, int> png_header(const fs::path& path) {
+  const std::string png = test::read_text(path);
+  if (png.size() < 26 || png.substr(12, 4) != "IHDR") return {-1, -1};
+  return {static_cast<unsigned char>(png[24]), static_cast<unsigned char>(png[25])};
+}
+
 // displacement.png: 16-bit grey, its bias and scale in the metadata equal to the report's,
 // and bias + scale * value reproduces displacement.exr within one step of 16 bits.
 TEST_F(Skeleton, DisplacementPngIs16BitAndDecodesToTheExr) {
@@ -1030,11 +1041,7 @@ TEST_F(Skeleton, DisplacementPngIs16BitAndDecodesToTheExr) {
                        (d / "png16").string() + " --size 64x32 --maps displacement,displacement_png --json");
   ASSERT_EQ(r.code, 0) << r.err;
   const auto report = nlohmann::json::parse(r.out);
-  const std::string png = test::read_text(d / "png16" / "displacement.png");
-  ASSERT_GT(png.size(), 26u);
-  EXPECT_EQ(png.substr(12, 4), "IHDR");
-  EXPECT_EQ(static_cast<int>(static_cast<unsigned char>(png[24])), 16) << "bit depth";
-  EXPECT_EQ(static_cast<int>(static_cast<unsigned char>(png[25])), 0) << "colour type: grey";
+  EXPECT_EQ(png_header(d / "png16" / "displacement.png"), std::make_pair(16, 0)) << "16 bits, colour type grey";
   const Image img = read_image(d / "png16" / "displacement.png"), exr = read_image(d / "png16" / "displacement.exr");
   const float bias = std::stof(std::get<std::string>(img.metadata.at("height_bias")));
   const float scale = std::stof(std::get<std::string>(img.metadata.at("height_scale")));
@@ -1048,6 +1055,368 @@ TEST_F(Skeleton, DisplacementPngIs16BitAndDecodesToTheExr) {
     worst = std::max(worst, std::abs(double(bias) + double(scale) * img.pixels[i] - exr.pixels[i]));
   std::printf("[ displacement.png ] worst |bias + scale v - exr| = %.3g = %.3f of scale/65535\n", worst, worst / (scale / 65535.0));
   EXPECT_LE(worst, scale / 65535.0);
+}
+
+}  // namespace
+}  // namespace meso
+
+namespace meso {
+namespace {
+
+// ---- bake: PNG bit depth, green convention; frames: formats that cannot hold frames; glTF
+// TANGENT values (issue 5, the auditor's gaps) ----
+
+// The identity bake of issue 5 through the command line: high = low, a curved mesh with UV
+// seams and a mirrored half (the library's BakeAccuracy test mesh), normal_ts.png in 8 and in
+// 16 bits: every covered texel decodes to (0, 0, 1) within half an LSB. displacement.png
+// follows --png-bits too; coverage.png stays 8-bit.
+TEST(CliBake, IdentityBakeDecodesToUpWithinHalfAnLsbIn8And16Bits) {
+  test::TempDir dir;
+  Mesh torus = test::BumpyTorus{}.mesh(48, 24);
+  test::mirror_half(torus);
+  write_mesh(torus, dir / "torus.obj");
+  // The premise, as the command sees the file: half the faces' corners mirrored.
+  const Result frames = run("frames " + (dir / "torus.obj").string() + " -o " + (dir / "torus.glb").string() + " --json");
+  ASSERT_EQ(frames.code, 0) << frames.err;
+  EXPECT_EQ(nlohmann::json::parse(frames.out)["mirrored_corners"], 3 * torus.n_faces() / 2);
+  for (const int bits : {8, 16}) {
+    const std::string out = "b" + std::to_string(bits);
+    const Result r = run(bake_args(dir, "torus.obj", "torus.obj", out, "--size 256 --maps normal_ts,displacement_png,coverage --json --png-bits " + std::to_string(bits)));
+    ASSERT_EQ(r.code, 0) << r.err;
+    const auto report = nlohmann::json::parse(r.out);
+    EXPECT_EQ(report["png_bits"], bits);
+    EXPECT_EQ(report["misses"], 0);
+    EXPECT_EQ(png_header(dir / out / "normal_ts.png"), std::make_pair(bits, 2)) << "RGB at the requested depth";
+    EXPECT_EQ(png_header(dir / out / "displacement.png"), std::make_pair(bits, 0)) << "grey at the requested depth";
+    EXPECT_EQ(png_header(dir / out / "coverage.png"), std::make_pair(8, 0)) << "coverage stays 8-bit grey";
+    const double max_code = bits == 8 ? 255.0 : 65535.0;
+    const Image normals = read_image(dir / out / "normal_ts.png"), coverage = read_image(dir / out / "coverage.png");
+    const test::UpCodesCheck check = test::check_codes_decode_to_up(test::image_codes(normals, max_code), coverage, max_code, out);
+    EXPECT_EQ(check.checked, report["covered_texels"].get<size_t>());
+    EXPECT_GT(check.checked, 256u * 256u / 2);
+    EXPECT_EQ(check.bad, 0u);
+    std::printf("[ identity cli ] %2d-bit: %zu covered texels, largest code offsets x %.2f y %.2f z %.2f LSB\n", bits, check.checked,
+                check.worst[0], check.worst[1], check.worst[2]);
+  }
+  for (const char* bad : {"--png-bits 12", "--png-bits 0", "--normal-y sideways"}) {
+    const Result r = run(bake_args(dir, "torus.obj", "torus.obj", "bad", std::string("--size 8 ") + bad));
+    EXPECT_EQ(r.code, 2) << bad;
+    EXPECT_NE(r.err.find(std::string(bad).substr(0, std::string(bad).find(' '))), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "bad")) << bad;
+  }
+}
+
+// --normal-y down (Unreal, DirectX: green = -v) writes the default map (up: glTF, Blender,
+// Unity) with y negated, texel for texel, and says so in the maps' metadata and the report.
+// A tilted high plane, so that both x and y of the normals are far from 0.
+TEST(CliBake, NormalYDownNegatesGreenTexelForTexel) {
+  test::TempDir dir;
+  write_mesh(test::make_grid(2, 2), dir / "low.obj");
+  write_mesh(test::make_plane(0.3f, -0.2f, 0.01f), dir / "high.obj");
+  const std::string common = "--size 16 --front 0.5 --back 0.5 --maps normal_ts,normal_ts_exr,normal_os_exr --json";
+  const Result up = run(bake_args(dir, "low.obj", "high.obj", "up", common));
+  const Result down = run(bake_args(dir, "low.obj", "high.obj", "down", common + " --normal-y down"));
+  ASSERT_EQ(up.code, 0) << up.err;
+  ASSERT_EQ(down.code, 0) << down.err;
+  EXPECT_EQ(nlohmann::json::parse(up.out)["normal_y"], "up") << "the default";
+  EXPECT_EQ(nlohmann::json::parse(down.out)["normal_y"], "down");
+  const Image up_exr = read_image(dir / "up" / "normal_ts.exr"), down_exr = read_image(dir / "down" / "normal_ts.exr");
+  const Image up_png = read_image(dir / "up" / "normal_ts.png"), down_png = read_image(dir / "down" / "normal_ts.png");
+  ASSERT_EQ(up_exr.pixels.size(), 16u * 16u * 3u);
+  ASSERT_EQ(down_exr.pixels.size(), up_exr.pixels.size());
+  ASSERT_EQ(down_png.pixels.size(), up_png.pixels.size());
+  const std::vector<long> up_codes = test::image_codes(up_png, 65535), down_codes = test::image_codes(down_png, 65535);
+  // The plane's normal in the grid's tangent space (t = +x, b = +y, n = +z): y = 0.2 / |.|.
+  const float expected_y = 0.2f / std::sqrt(0.3f * 0.3f + 0.2f * 0.2f + 1.0f);
+  for (size_t i = 0; i < 16 * 16; ++i) {
+    ASSERT_NEAR(up_exr.pixels[3 * i + 1], expected_y, 1e-5f) << i;
+    ASSERT_EQ(down_exr.pixels[3 * i + 0], up_exr.pixels[3 * i + 0]) << i;
+    ASSERT_EQ(down_exr.pixels[3 * i + 1], -up_exr.pixels[3 * i + 1]) << i;
+    ASSERT_EQ(down_exr.pixels[3 * i + 2], up_exr.pixels[3 * i + 2]) << i;
+    // Encoded: (y + 1) / 2 and (1 - y) / 2 sum to one, so the codes to 65535 (within the
+    // rounding of a code that falls on a half).
+    ASSERT_EQ(down_codes[3 * i + 0], up_codes[3 * i + 0]) << i;
+    ASSERT_NEAR(down_codes[3 * i + 1] + up_codes[3 * i + 1], 65535, 1) << i;
+    ASSERT_EQ(down_codes[3 * i + 2], up_codes[3 * i + 2]) << i;
+  }
+  for (const Image* m : {&up_exr, &up_png})
+    EXPECT_EQ(std::get<std::string>(m->metadata.at("normal_y")), "up");
+  for (const Image* m : {&down_exr, &down_png}) {
+    EXPECT_EQ(std::get<std::string>(m->metadata.at("normal_y")), "down");
+    EXPECT_NE(std::get<std::string>(m->metadata.at("space")).find("-v"), std::string::npos);
+  }
+  // normal_os.exr: the plane's own normal, and the same bytes whatever the convention.
+  const Image os = read_image(dir / "up" / "normal_os.exr");
+  const float len = std::sqrt(0.3f * 0.3f + 0.2f * 0.2f + 1.0f);
+  const float plane_normal[3] = {-0.3f / len, 0.2f / len, 1.0f / len};
+  ASSERT_EQ(os.pixels.size(), 16u * 16u * 3u);
+  for (size_t i = 0; i < os.pixels.size(); ++i) ASSERT_NEAR(os.pixels[i], plane_normal[i % 3], 1e-5f) << i;
+  EXPECT_EQ(test::read_text(dir / "up" / "normal_os.exr"), test::read_text(dir / "down" / "normal_os.exr"));
+}
+
+// frames writes tangents and curvatures, which only glTF holds: an .obj or .ply output would
+// silently drop them, so it is refused as a bad value (exit 2, one line naming the file),
+// before any work, and nothing is written.
+TEST(CliFrames, RefusesOutputsThatCannotHoldFrames) {
+  test::TempDir dir;
+  write_mesh(test::make_grid(2, 2), dir / "grid.obj");
+  for (const char* out : {"x.obj", "x.ply", "X.OBJ"}) {
+    const Result r = run("frames " + (dir / "grid.obj").string() + " -o " + (dir / out).string());
+    EXPECT_EQ(r.code, 2) << out;
+    EXPECT_EQ(lines(r.err), 1u) << r.err;
+    EXPECT_NE(r.err.find(out), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(".gltf or .glb"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / out));
+  }
+  EXPECT_EQ(run("frames " + (dir / "grid.obj").string() + " -o " + (dir / "x.gltf").string()).code, 0);
+}
+
+// One glTF attribute of the first primitive as floats (the buffer embedded as base64, as
+// meso writes it), `components` per vertex.
+std::vector<float> gltf_floats(const nlohmann::json& gltf, const std::string& attribute, int components) {
+  const std::string uri = gltf["buffers"][0]["uri"].get<std::string>();
+  const std::string prefix = "data:application/octet-stream;base64,";
+  EXPECT_EQ(uri.compare(0, prefix.size(), prefix), 0);
+  std::vector<uint8_t> bytes;
+  uint32_t acc = 0;
+  int bits = 0;
+  for (size_t i = prefix.size(); i < uri.size() && uri[i] != '='; ++i) {
+    const char c = uri[i];
+    const int v = c >= 'A' && c <= 'Z' ? c - 'A' : c >= 'a' && c <= 'z' ? c - 'a' + 26 : c >= '0' && c <= '9' ? c - '0' + 52 : c == '+' ? 62 : 63;
+    acc = (acc << 6) | static_cast<uint32_t>(v);
+    bits += 6;
+    if (bits >= 8) {
+      bits -= 8;
+      bytes.push_back(static_cast<uint8_t>(acc >> bits));
+    }
+  }
+  const auto& accessor = gltf["accessors"][gltf["meshes"][0]["primitives"][0]["attributes"][attribute].get<size_t>()];
+  EXPECT_EQ(accessor["componentType"], 5126) << "float";
+  const auto& view = gltf["bufferViews"][accessor["bufferView"].get<size_t>()];
+  const size_t offset = view["byteOffset"].get<size_t>() + accessor.value("byteOffset", size_t(0));
+  const size_t count = accessor["count"].get<size_t>() * static_cast<size_t>(components);
+  std::vector<float> out(count);
+  EXPECT_LE(offset + 4 * count, bytes.size());
+  if (offset + 4 * count <= bytes.size()) std::memcpy(out.data(), bytes.data() + offset, 4 * count);
+  return out;
+}
+
+// glTF TANGENT values through `meso frames -o x.gltf`, read back from the file: a flat grid
+// (UV = xy) has (1, 0, 0, +1) everywhere; the same grid with the right half's u mirrored
+// (u = 1 - x there: the tangent turns to -x, the handedness to -1) keeps (1, 0, 0, +1) on the
+// left and has (-1, 0, 0, -1) on the right, and the vertices on the mirror line, whose UVs
+// are the same on both sides, are split because their tangents differ.
+TEST(CliFrames, GltfTangentsOfAFlatGridAndAMirroredHalf) {
+  test::TempDir dir;
+  const int n = 4;
+  Mesh grid = test::make_grid(n, n);
+  write_mesh(grid, dir / "grid.obj");
+  Mesh mirrored = grid;
+  for (auto f : mirrored.faces()) {
+    float cx = 0;
+    for (auto v : mirrored.fv_range(f)) cx += mirrored.point(v)[0] / 3.0f;
+    if (cx > 0.5f)
+      for (auto h : face_halfedges(mirrored, f)) {
+        const Vec2f uv = mirrored.texcoord2D(h);
+        mirrored.set_texcoord2D(h, Vec2f(1.0f - uv[0], uv[1]));
+      }
+  }
+  write_mesh(mirrored, dir / "mirrored.obj");
+  for (const char* name : {"grid", "mirrored"}) {
+    SCOPED_TRACE(name);
+    const Result r = run("frames " + (dir / (std::string(name) + ".obj")).string() + " -o " + (dir / (std::string(name) + ".gltf")).string());
+    ASSERT_EQ(r.code, 0) << r.err;
+    const auto gltf = nlohmann::json::parse(test::read_text(dir / (std::string(name) + ".gltf")));
+    const std::vector<float> tangent = gltf_floats(gltf, "TANGENT", 4), position = gltf_floats(gltf, "POSITION", 3);
+    const size_t vertices = position.size() / 3;
+    ASSERT_EQ(tangent.size(), 4 * vertices);
+    const bool mirror = std::string(name) == "mirrored";
+    // (n + 1)^2 grid vertices; the mirrored grid adds a copy of the n + 1 on the line x = 1/2.
+    EXPECT_EQ(vertices, static_cast<size_t>((n + 1) * (n + 1) + (mirror ? n + 1 : 0)));
+    size_t plain = 0, flipped = 0;
+    for (size_t i = 0; i < vertices; ++i) {
+      const float x = position[3 * i];
+      const float* t = &tangent[4 * i];
+      const bool right = mirror && (x > 0.5f || (x == 0.5f && t[3] < 0));
+      const float want[4] = {right ? -1.0f : 1.0f, 0.0f, 0.0f, right ? -1.0f : 1.0f};
+      for (int c = 0; c < 4; ++c) EXPECT_NEAR(t[c], want[c], 1e-6f) << "vertex " << i << " at x = " << x << ", component " << c;
+      (t[3] < 0 ? flipped : plain) += 1;
+    }
+    EXPECT_EQ(plain, static_cast<size_t>(mirror ? (n + 1) * (n / 2 + 1) : (n + 1) * (n + 1)));
+    EXPECT_EQ(flipped, static_cast<size_t>(mirror ? (n + 1) * (n / 2 + 1) : 0));
+  }
+}
+
+}  // namespace
+}  // namespace meso
+
+namespace meso {
+namespace {
+
+// ---- bake: the options tested only in the library until now, through the command line ----
+
+// A cage leaning (0.02, 0, 0.05) away from a flat base: rays run toward it (distances along
+// the leaning ray: a layer 0.01 up is 0.01 * slant away) and stop at it (a layer at 0.06, past
+// the cage's 0.05, is out of reach: every texel misses, although --front 0.2 would reach it
+// along the normal: Bake.CageSetsTheRaysDirectionAndOutwardReach).
+TEST(CliBake, CageLeansTheRaysAndBoundsTheirReach) {
+  test::TempDir dir;
+  const Mesh base = test::make_grid(2, 2);
+  Mesh cage_mesh = base;
+  for (auto v : cage_mesh.vertices()) cage_mesh.set_point(v, cage_mesh.point(v) + Vec3f(0.02f, 0.0f, 0.05f));
+  write_mesh(base, dir / "low.obj");
+  write_mesh(cage_mesh, dir / "cage.obj");
+  write_mesh(test::make_layers({{0.01f, true}}), dir / "near.obj");
+  write_mesh(test::make_layers({{0.06f, true}}), dir / "far.obj");
+  write_mesh(test::make_grid(3, 2), dir / "other.obj");
+  const std::string common = "--size 8 --front 0.2 --back 0.2 --maps displacement --json";
+  const std::string cage = " --cage " + (dir / "cage.obj").string();
+  const double slant = std::sqrt(0.02 * 0.02 + 0.05 * 0.05) / 0.05;  // ray length per unit height
+  const Result near = run(bake_args(dir, "low.obj", "near.obj", "near", common + cage));
+  ASSERT_EQ(near.code, 0) << near.err;
+  const auto near_report = nlohmann::json::parse(near.out);
+  EXPECT_EQ(near_report["misses"], 0);
+  EXPECT_EQ(near_report["cage"], (dir / "cage.obj").string());
+  EXPECT_NEAR(near_report["displacement_min"].get<double>(), 0.01 * slant, 1e-5);
+  EXPECT_NEAR(near_report["displacement_max"].get<double>(), 0.01 * slant, 1e-5);
+  const Result far = run(bake_args(dir, "low.obj", "far.obj", "far", common + cage));
+  ASSERT_EQ(far.code, 0) << far.err;
+  const auto far_report = nlohmann::json::parse(far.out);
+  EXPECT_EQ(far_report["hits"], 0) << "the layer past the cage is out of reach";
+  EXPECT_EQ(far_report["misses"], far_report["covered_texels"]);
+  // A cage must have the base's topology: a bad input naming the cage, nothing written.
+  const Result bad = run(bake_args(dir, "low.obj", "near.obj", "bad", common + " --cage " + (dir / "other.obj").string()));
+  EXPECT_EQ(bad.code, 3);
+  EXPECT_EQ(lines(bad.err), 1u) << bad.err;
+  EXPECT_NE(bad.err.find("other.obj"), std::string::npos) << bad.err;
+  EXPECT_FALSE(fs::exists(dir / "bad"));
+}
+
+// --basis pn: a coarse sphere band (12 sides, radial normals in the file) over a fine one. The
+// flat triangles sit well inside the sphere; the PN patches built from the normals follow it
+// far more closely (the report's displacement range over hits, --dilate 0).
+TEST(CliBake, PnBasisFollowsTheCurvedSurface) {
+  test::TempDir dir;
+  auto sphere = [](int columns, int rows) {
+    Mesh m = test::make_parametric(
+        columns, rows,
+        [](double s, double t) {
+          const double a = 2 * M_PI * s, b = M_PI * (0.15 + 0.7 * t);  // a band, away from the poles
+          return Vec3f(static_cast<float>(std::sin(b) * std::cos(a)), static_cast<float>(std::sin(b) * std::sin(a)), static_cast<float>(std::cos(b)));
+        },
+        true, false);
+    for (auto v : m.vertices()) m.set_normal(v, m.point(v).normalized());
+    return m;
+  };
+  write_mesh(sphere(12, 4), dir / "low.obj");
+  write_mesh(sphere(128, 48), dir / "high.obj");
+  auto worst = [&](const std::string& basis) {
+    const Result r = run(bake_args(dir, "low.obj", "high.obj", basis, "--size 64 --dilate 0 --maps displacement --json --basis " + basis));
+    EXPECT_EQ(r.code, 0) << r.err;
+    if (r.code != 0) return -1.0;
+    const auto report = nlohmann::json::parse(r.out);
+    EXPECT_EQ(report["basis"], basis);
+    EXPECT_EQ(report["misses"], 0);
+    return std::max(std::abs(report["displacement_min"].get<double>()), std::abs(report["displacement_max"].get<double>()));
+  };
+  const double linear = worst("linear"), pn = worst("pn");
+  EXPECT_GT(linear, 0.02) << "the flat triangles of a 12-sided band are far inside";
+  EXPECT_LT(pn, 0.2 * linear) << "linear " << linear << ", pn " << pn;
+  EXPECT_EQ(run(bake_args(dir, "low.obj", "high.obj", "bad", "--size 8 --basis cubic")).code, 2);
+}
+
+// --detail BUMP --detail-scale S: a sine across the high plane's u (u = (x + 0.5) / 2) adds
+// S (b - 1/2) to the displacement and tilts the normals by its slope, in displacement.exr,
+// normal_ts.exr and normal_os.exr, at S = 0.02 (twice the default: a scale ignored would show).
+// A high mesh without UVs cannot carry the bump (bad input).
+TEST(CliBake, DetailBumpAddsItsScaledHeightAndTiltsTheNormals) {
+  test::TempDir dir;
+  write_mesh(test::make_grid(2, 2), dir / "low.obj");
+  write_mesh(test::make_plane(0, 0, 0), dir / "high.obj");
+  Image bump(64, 1, 1);
+  for (int x = 0; x < 64; ++x) bump.at(x, 0) = static_cast<float>(0.5 + 0.5 * std::sin(2 * M_PI * (x + 0.5) / 64));
+  write_image(bump, dir / "bump.exr", PixelFormat::float32);
+  const std::string common = "--size 16 --front 0.05 --back 0.05 --maps displacement,normal_ts_exr,normal_os_exr --detail " + (dir / "bump.exr").string();
+  const double scale = 0.02;
+  const Result r = run(bake_args(dir, "low.obj", "high.obj", "scaled", common + " --detail-scale 0.02"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  const Image disp = read_image(dir / "scaled" / "displacement.exr"), ts = read_image(dir / "scaled" / "normal_ts.exr"),
+              os = read_image(dir / "scaled" / "normal_os.exr");
+  for (int x = 2; x < 14; ++x) {
+    const double u_high = ((x + 0.5) / 16 + 0.5) / 2;
+    const double height = scale * 0.5 * std::sin(2 * M_PI * u_high);
+    const double slope = scale * 0.5 * 2 * M_PI * std::cos(2 * M_PI * u_high) / 2;  // per unit x
+    const double nx = -slope / std::sqrt(1 + slope * slope);
+    EXPECT_NEAR(disp.at(x, 8), height, 4e-4) << x;
+    EXPECT_NEAR(os.at(x, 8, 0), nx, 2e-3) << x;
+    EXPECT_NEAR(ts.at(x, 8, 0), nx, 2e-3) << x << ": the grid's tangent is +x";
+  }
+  test::write_text(dir / "nouv.obj", "v -1 -1 0.01\nv 2 -1 0.01\nv 2 2 0.01\nv -1 2 0.01\nf 1 2 3\nf 1 3 4\n");
+  const Result no_uvs = run(bake_args(dir, "low.obj", "nouv.obj", "bad", common));
+  EXPECT_EQ(no_uvs.code, 3) << no_uvs.err;
+  EXPECT_NE(no_uvs.err.find("nouv.obj"), std::string::npos) << no_uvs.err;
+  EXPECT_FALSE(fs::exists(dir / "bad"));
+}
+
+// An OBJ object `name`: the rectangle [x0, x1] x [y0, y1] at height z (two triangles, facing
+// +z), with UV = (x, y) when `uv`; `first` is the 1-based index of its first vertex.
+std::string rect_obj(const std::string& name, float x0, float x1, float y0, float y1, float z, int first, bool uv) {
+  std::string s = "o " + name + "\n";
+  const float xs[4] = {x0, x1, x1, x0}, ys[4] = {y0, y0, y1, y1};
+  for (int k = 0; k < 4; ++k) {
+    s += "v " + std::to_string(xs[k]) + " " + std::to_string(ys[k]) + " " + std::to_string(z) + "\n";
+    if (uv) s += "vt " + std::to_string(xs[k]) + " " + std::to_string(ys[k]) + "\n";
+  }
+  auto corner = [&](int k) {
+    const std::string i = std::to_string(first + k);
+    return uv ? i + "/" + i : i;
+  };
+  return s + "f " + corner(0) + " " + corner(1) + " " + corner(2) + "\nf " + corner(0) + " " + corner(2) + " " + corner(3) + "\n";
+}
+
+// --match-by-name: the base's "Box_low" (left half) and "Plate_LP.001" (right half) each see
+// only their high part: box_high 0.01 above everything, plate_high 0.02 below everything.
+// Paired, the plate's texels take their own plate, not the nearer box surface that the
+// nearest rule picks unpaired (Bake.MatchByNamePairsParts).
+TEST(CliBake, MatchByNameKeepsRaysOffTheNeighbouringPart) {
+  test::TempDir dir;
+  test::write_text(dir / "low.obj", rect_obj("Box_low", 0, 0.5f, 0, 1, 0, 1, true) + rect_obj("Plate_LP.001", 0.5f, 1, 0, 1, 0, 5, true));
+  test::write_text(dir / "high.obj", rect_obj("box_high", -1, 2, -1, 2, 0.01f, 1, false) + rect_obj("plate_high", -1, 2, -1, 2, -0.02f, 5, false));
+  const std::string common = "--size 8 --front 0.05 --back 0.05 --maps displacement --json";
+  const Result paired = run(bake_args(dir, "low.obj", "high.obj", "paired", common + " --match-by-name"));
+  ASSERT_EQ(paired.code, 0) << paired.err;
+  const auto report = nlohmann::json::parse(paired.out);
+  EXPECT_EQ(report["matched_parts"], nlohmann::json::array({"Box_low", "Plate_LP.001"}));
+  EXPECT_TRUE(report["unmatched_parts"].empty());
+  const Image disp = read_image(dir / "paired" / "displacement.exr");
+  for (int y = 0; y < 8; ++y) {
+    EXPECT_NEAR(disp.at(1, y), 0.01f, 1e-6f) << "box texel";
+    EXPECT_NEAR(disp.at(6, y), -0.02f, 1e-6f) << "plate texel: the nearer box surface is not its part";
+  }
+  // A base part without a high partner sees the whole high mesh, with a warning and in the report.
+  test::write_text(dir / "other.obj", rect_obj("box_high", -1, 2, -1, 2, 0.01f, 1, false) + rect_obj("other_high", -1, 2, -1, 2, -0.02f, 5, false));
+  const Result partial = run(bake_args(dir, "low.obj", "other.obj", "partial", common + " --match-by-name"));
+  ASSERT_EQ(partial.code, 0) << partial.err;
+  EXPECT_EQ(nlohmann::json::parse(partial.out)["unmatched_parts"], nlohmann::json::array({"Plate_LP.001"}));
+  EXPECT_NE(partial.err.find("no high part of the same name"), std::string::npos) << partial.err;
+  EXPECT_NEAR(read_image(dir / "partial" / "displacement.exr").at(6, 4), 0.01f, 1e-6f);
+}
+
+// --front/--back as percentages resolve against the high mesh's bounding-box diagonal, and
+// the default reach is 5 % of it, both ways (the report's front and back, object units).
+TEST(CliBake, PercentReachResolvesAgainstTheHighDiagonal) {
+  test::TempDir dir;
+  write_mesh(test::make_grid(2, 2), dir / "low.obj");
+  write_mesh(test::make_plane(0.3f, -0.2f, 0.01f), dir / "high.obj");
+  const float diagonal = bounding_box(read_mesh(dir / "high.obj")).diagonal();
+  ASSERT_GT(diagonal, 2.8f) << "[-0.5, 1.5]^2, tilted";
+  const std::string common = "--size 4 --maps displacement --json";
+  const auto percent = nlohmann::json::parse(run(bake_args(dir, "low.obj", "high.obj", "p", common + " --front 4% --back 2.5%")).out);
+  EXPECT_NEAR(percent["front"].get<double>(), 0.04 * diagonal, 1e-6 * diagonal);
+  EXPECT_NEAR(percent["back"].get<double>(), 0.025 * diagonal, 1e-6 * diagonal);
+  const auto defaults = nlohmann::json::parse(run(bake_args(dir, "low.obj", "high.obj", "d", common)).out);
+  EXPECT_NEAR(defaults["front"].get<double>(), 0.05 * diagonal, 1e-6 * diagonal);
+  EXPECT_NEAR(defaults["back"].get<double>(), 0.05 * diagonal, 1e-6 * diagonal);
 }
 
 }  // namespace

@@ -63,6 +63,8 @@ void add_bake(CLI::App& app, Context& ctx) {
     float detail_scale = 0.01f;
     float max_miss_rate = 1;
     int samples = 1;
+    int png_bits = 16;
+    std::string normal_y = "up";
     bool ignore_backfaces = false, match_by_name = false;
   };
   auto args = std::make_shared<Args>();
@@ -73,11 +75,20 @@ void add_bake(CLI::App& app, Context& ctx) {
                   "Cage mesh with the base's topology: rays go from each base point toward the cage's point and stop there");
   sub->add_option("-o,--output", args->out_dir, "Output folder (the maps chosen with --maps)")->required();
   sub->add_option("--maps", args->maps,
-                  "Comma-separated maps to write: displacement (.exr, float), displacement_png (16-bit, normalised; scale and bias "
-                  "in its metadata and the report), normal_ts (.png 16-bit), normal_ts_exr, normal_os (object space, .png 16-bit), "
-                  "normal_os_exr, coverage (.png)")
+                  "Comma-separated maps to write: displacement (.exr, float), displacement_png (normalised; scale and bias in its "
+                  "metadata and the report), normal_ts (.png), normal_ts_exr, normal_os (object space, .png), normal_os_exr, "
+                  "coverage (.png); PNG bit depth: --png-bits")
       ->capture_default_str();
   sub->add_option("--size", args->size, "Map size: N or WxH texels");
+  sub->add_option("--png-bits", args->png_bits,
+                  "Bits per channel of the PNG maps (normal_ts, normal_os, displacement_png): 8 or 16 (coverage.png is always 8)")
+      ->check(CLI::IsMember({8, 16}))
+      ->capture_default_str();
+  sub->add_option("--normal-y", args->normal_y,
+                  "Green channel of the tangent-space normal maps (normal_ts, normal_ts_exr): up = +v (OpenGL: glTF, Blender, "
+                  "Unity), down = -v (DirectX: Unreal); see docs/formats.md")
+      ->check(CLI::IsMember({"up", "down"}))
+      ->capture_default_str();
   sub->add_option("--front", args->front,
                   "Ray reach outward from the base: object units, or a percentage of the high mesh's bounding-box diagonal "
                   "(default 5%)");
@@ -168,8 +179,17 @@ void add_bake(CLI::App& app, Context& ctx) {
       o.back = parse_length(args->back, diagonal, "--back");
       o.bunch = parse_length(args->bunch, diagonal, "--bunch");
       const auto start = std::chrono::steady_clock::now();
-      const BakeResult r = bake(low, high, o, progress);
+      BakeResult r = bake(low, high, o, progress);
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      // --normal-y down: the DirectX convention, green = -v. The tangent-space normals are
+      // otherwise those of the bake (MikkTSpace, +y = +v), so flipping y is exact.
+      const bool y_down = args->normal_y == "down";
+      if (y_down)
+        for (size_t i = 0; i < r.normal_ts.texel_count(); ++i) r.normal_ts.pixels[3 * i + 1] = -r.normal_ts.pixels[3 * i + 1];
+      r.normal_ts.metadata["space"] = std::string(y_down ? "tangent (MikkTSpace frame, +y = -v: green down, DirectX)"
+                                                         : "tangent (MikkTSpace frame, +y = +v: green up, OpenGL)");
+      r.normal_ts.metadata["normal_y"] = args->normal_y;
+      const PixelFormat png_format = args->png_bits == 8 ? PixelFormat::uint8 : PixelFormat::uint16;
       const std::filesystem::path dir(args->out_dir);
       OutputSet outputs;
       nlohmann::json written = nlohmann::json::array();
@@ -186,12 +206,12 @@ void add_bake(CLI::App& app, Context& ctx) {
           png.metadata["height_bias"] = bias;
           png.metadata["height_scale"] = scale;
           png.metadata["height_units"] = std::string("object = bias + scale * value");
-          write_image(png, outputs.add(file), PixelFormat::uint16);
+          write_image(png, outputs.add(file), png_format);
           png_range = {{"bias", bias}, {"scale", scale}};
         }
-        if (name == "normal_ts") write_image(encode_normal_map(r.normal_ts), outputs.add(file), PixelFormat::uint16);
+        if (name == "normal_ts") write_image(encode_normal_map(r.normal_ts), outputs.add(file), png_format);
         if (name == "normal_ts_exr") write_image(r.normal_ts, outputs.add(file), PixelFormat::float32);
-        if (name == "normal_os") write_image(encode_normal_map(r.normal_os), outputs.add(file), PixelFormat::uint16);
+        if (name == "normal_os") write_image(encode_normal_map(r.normal_os), outputs.add(file), png_format);
         if (name == "normal_os_exr") write_image(r.normal_os, outputs.add(file), PixelFormat::float32);
         if (name == "coverage") write_image(r.coverage, outputs.add(file), PixelFormat::uint8);
       }
@@ -211,6 +231,8 @@ void add_bake(CLI::App& app, Context& ctx) {
                 {"bunch", r.bunch},
                 {"samples", r.samples},
                 {"hit_rule", hit_rule_name(o.hit)},
+                {"png_bits", args->png_bits},
+                {"normal_y", args->normal_y},
                 {"cage", args->cage},
                 {"basis", args->basis},
                 {"detail", args->detail},

@@ -21,14 +21,23 @@ void add_frames(CLI::App& app, Context& ctx) {
   auto args = std::make_shared<Args>();
   CLI::App* sub = app.add_subcommand("frames", "Tangent frames (MikkTSpace conventions) and principal curvatures of a base mesh");
   sub->add_option("input", args->input, "Base mesh with UVs")->required();
-  sub->add_option("-o,--output", args->output, "Output mesh; .gltf/.glb carry TANGENT, _CURVATURE and _PRINCIPAL_DIRECTION")->required();
+  sub->add_option("-o,--output", args->output, "Output mesh, .gltf or .glb (TANGENT, _CURVATURE, _PRINCIPAL_DIRECTION; .obj and .ply, which cannot hold them, are refused)")->required();
   CLI::Option* map = sub->add_option("--curvature-map", args->curvature_map,
                                      "Also write the second fundamental form per texel of the UV layout (float32 EXR: R = k_tt, G = k_tb, "
                                      "B = k_bb in 1/object units in the texel's tangent frame, A = 1 computed / 0 dilated; see docs/formats.md)");
   sub->add_option("--size", args->size, "Curvature map size: N or WxH texels (default 1024)")->needs(map);
   sub->callback([&ctx, args] {
     ctx.run = [&ctx, args](nlohmann::json& report, Progress&) {
-      if (!is_writable_mesh_extension(args->output)) throw UsageError(args->output + ": unknown mesh extension (use .obj, .ply, .gltf or .glb)");
+      if (!is_writable_mesh_extension(args->output)) throw UsageError(args->output + ": unknown mesh extension (use .gltf or .glb)");
+      {
+        // OBJ and PLY have no place for per-corner tangents or per-vertex curvatures: writing
+        // one would drop everything this command computes and still succeed, so it is refused
+        // as a bad value (exit 2) before any work.
+        std::string ext = std::filesystem::path(args->output).extension().string();
+        std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+        if (ext != ".gltf" && ext != ".glb")
+          throw UsageError(args->output + ": " + ext.substr(1) + " cannot hold tangent frames or curvatures; write .gltf or .glb");
+      }
       CurvatureMapOptions map_options;
       const bool want_map = !args->curvature_map.empty();
       if (want_map) {
@@ -44,11 +53,12 @@ void add_frames(CLI::App& app, Context& ctx) {
       store_tangents(mesh, frames);
       const auto curvature = fit_curvature(mesh);
       store_curvature(mesh, curvature);
-      size_t unfit = 0, two_ring = 0;
+      size_t unfit = 0, two_ring = 0, three_ring = 0;
       float k_lo = 0, k_hi = 0;
       for (const auto& c : curvature) {
         unfit += c.rings == 0;
         two_ring += c.rings == 2;
+        three_ring += c.rings == 3;
         k_lo = std::min(k_lo, c.k2);
         k_hi = std::max(k_hi, c.k1);
       }
@@ -70,7 +80,7 @@ void add_frames(CLI::App& app, Context& ctx) {
                 {"input", in_report},
                 {"output", args->output},
                 {"mirrored_corners", mirrored},
-                {"curvature", {{"min", k_lo}, {"max", k_hi}, {"two_ring_vertices", two_ring}, {"unfit_vertices", unfit}}}};
+                {"curvature", {{"min", k_lo}, {"max", k_hi}, {"two_ring_vertices", two_ring}, {"three_ring_vertices", three_ring}, {"unfit_vertices", unfit}}}};
       if (want_map)
         report["curvature_map"] = {{"output", args->curvature_map},
                                    {"width", map_options.width},

@@ -15,6 +15,7 @@
 #include "meso/formats/image_io.hpp"
 #include "meso/uvpack/uv_check.hpp"
 #include "meso/uvpack/uv_pack.hpp"
+#include "bumpy_torus.hpp"
 #include "test_support.hpp"
 
 #include <Eigen/Dense>
@@ -32,65 +33,10 @@
 namespace meso {
 namespace {
 
+using test::BumpyTorus;
+using test::mirror_half;
+
 constexpr double kPi = 3.14159265358979323846;
-
-// A torus around the z axis, major radius R, tube radius r + amp * sin(2 pi ks s) sin(2 pi kt t)
-// (ks, kt integers: periodic), at s, t in [0, 1]: theta = 2 pi s around z, phi = 2 pi t around
-// the tube.
-struct BumpyTorus {
-  double R = 1.0, r = 0.35, amp = 0.0;
-  int ks = 8, kt = 4;
-
-  double rho(double s, double t) const { return r + amp * std::sin(2 * kPi * ks * s) * std::sin(2 * kPi * kt * t); }
-  Eigen::Vector3d point(double s, double t) const {
-    const double th = 2 * kPi * s, ph = 2 * kPi * t, q = rho(s, t);
-    return {(R + q * std::cos(ph)) * std::cos(th), (R + q * std::cos(ph)) * std::sin(th), q * std::sin(ph)};
-  }
-  // The analytic unit normal (outward): normalize(dP/ds x dP/dt).
-  Eigen::Vector3d normal(double s, double t) const {
-    const double th = 2 * kPi * s, ph = 2 * kPi * t, q = rho(s, t);
-    const double q_s = amp * 2 * kPi * ks * std::cos(2 * kPi * ks * s) * std::sin(2 * kPi * kt * t);
-    const double q_t = amp * 2 * kPi * kt * std::sin(2 * kPi * ks * s) * std::cos(2 * kPi * kt * t);
-    const Eigen::Vector3d e(std::cos(ph) * std::cos(th), std::cos(ph) * std::sin(th), std::sin(ph));  // tube normal
-    const Eigen::Vector3d d_th(-(R + q * std::cos(ph)) * std::sin(th), (R + q * std::cos(ph)) * std::cos(th), 0.0);
-    const Eigen::Vector3d d_ph(-q * std::sin(ph) * std::cos(th), -q * std::sin(ph) * std::sin(th), q * std::cos(ph));
-    const Eigen::Vector3d p_s = 2 * kPi * d_th + q_s * e, p_t = 2 * kPi * d_ph + q_t * e;
-    return p_s.cross(p_t).normalized();
-  }
-  // The parameters of a point on the surface: the bump runs along the tube normal, which the
-  // point's angles determine exactly.
-  void params(const Eigen::Vector3d& p, double& s, double& t) const {
-    s = std::atan2(p.y(), p.x()) / (2 * kPi);
-    t = std::atan2(p.z(), std::hypot(p.x(), p.y()) - R) / (2 * kPi);
-    s -= std::floor(s);
-    t -= std::floor(t);
-  }
-  Mesh mesh(int columns, int rows) const {
-    return test::make_parametric(
-        columns, rows,
-        [this](double s, double t) {
-          const Eigen::Vector3d p = point(s, t);
-          return Vec3f(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()));
-        },
-        true, true);
-  }
-};
-
-// Lays out a parametric mesh's UVs (s, t) as two charts: the half s < 1/2 as it is, the half
-// s > 1/2 mirrored in u (u decreasing with s) beside it. So the mesh has the wrap seams, a
-// seam with a change of orientation at s = 1/2, and mirrored tangent frames on one half.
-void mirror_half(Mesh& m) {
-  for (auto f : m.faces()) {
-    const auto hs = face_halfedges(m, f);
-    float sc = 0;
-    for (auto h : hs) sc += m.texcoord2D(h)[0] / 3.0f;
-    for (auto h : hs) {
-      const Vec2f st = m.texcoord2D(h);
-      const float u = sc < 0.5f ? 0.03f + 0.9f * st[0] : 0.97f - 0.9f * (st[0] - 0.5f);
-      m.set_texcoord2D(h, Vec2f(u, 0.03f + 0.94f * st[1]));
-    }
-  }
-}
 
 size_t mirrored_faces(const Mesh& m) {
   const auto frames = compute_tangent_frames(m);
@@ -109,15 +55,14 @@ std::vector<long> png_codes(const Image& normal_ts, PixelFormat format, const te
   EXPECT_EQ(back.height, normal_ts.height);
   EXPECT_EQ(back.channels, 3);
   max_code = format == PixelFormat::uint8 ? 255.0 : 65535.0;
-  std::vector<long> codes(back.pixels.size());
-  for (size_t i = 0; i < codes.size(); ++i) codes[i] = std::lround(static_cast<double>(back.pixels[i]) * max_code);
-  return codes;
+  return test::image_codes(back, max_code);
 }
 
 // Identity bake: high = low, a curved mesh with UV seams and a mirrored half. Every covered
 // texel must decode to (0, 0, 1) within half a least significant bit: the stored code lies
 // within 1/2 of the exact (0.5, 0.5, 1) * max (x and y: 127 or 128 in 8 bits, 32767 or 32768
-// in 16 bits; z: 255 or 65535).
+// in 16 bits; z: 255 or 65535). (Through the command line, --png-bits 8 and 16:
+// CliBake.IdentityBakeDecodesToUpWithinHalfAnLsbIn8And16Bits.)
 TEST(BakeAccuracy, IdentityBakeDecodesToUpWithinHalfAnLsbIn8And16Bits) {
   Mesh torus = BumpyTorus{}.mesh(48, 24);
   mirror_half(torus);
@@ -134,27 +79,12 @@ TEST(BakeAccuracy, IdentityBakeDecodesToUpWithinHalfAnLsbIn8And16Bits) {
   for (const PixelFormat format : {PixelFormat::uint8, PixelFormat::uint16}) {
     double max_code = 0;
     const std::vector<long> codes = png_codes(r.normal_ts, format, dir, max_code);
-    const double ideal[3] = {0.5 * max_code, 0.5 * max_code, max_code};
-    size_t checked = 0, bad = 0;
-    double worst[3] = {0, 0, 0};
-    for (size_t i = 0; i < r.coverage.texel_count(); ++i) {
-      if (r.coverage.pixels[i] == 0.0f) continue;  // outside every chart
-      ++checked;
-      bool ok = true;
-      for (size_t c = 0; c < 3; ++c) {
-        const double off = std::abs(static_cast<double>(codes[3 * i + c]) - ideal[c]);
-        worst[c] = std::max(worst[c], off);
-        ok = ok && off <= 0.5;
-      }
-      if (!ok && bad++ < 5)
-        ADD_FAILURE() << (max_code == 255 ? "8" : "16") << "-bit texel " << i % 256 << "," << i / 256 << ": codes " << codes[3 * i]
-                      << " " << codes[3 * i + 1] << " " << codes[3 * i + 2] << ", float " << r.normal_ts.pixels[3 * i] << " "
-                      << r.normal_ts.pixels[3 * i + 1] << " " << r.normal_ts.pixels[3 * i + 2];
-    }
-    EXPECT_EQ(checked, r.covered_texels);
-    EXPECT_EQ(bad, 0u);
-    std::printf("[ identity ] %s-bit: %zu covered texels, largest code offsets from the ideal x %.2f y %.2f z %.2f LSB\n",
-                max_code == 255 ? " 8" : "16", checked, worst[0], worst[1], worst[2]);
+    const char* bits = max_code == 255 ? " 8" : "16";
+    const test::UpCodesCheck check = test::check_codes_decode_to_up(codes, r.coverage, max_code, std::string(bits) + "-bit");
+    EXPECT_EQ(check.checked, r.covered_texels);
+    EXPECT_EQ(check.bad, 0u);
+    std::printf("[ identity ] %s-bit: %zu covered texels, largest code offsets from the ideal x %.2f y %.2f z %.2f LSB\n", bits,
+                check.checked, check.worst[0], check.worst[1], check.worst[2]);
   }
 }
 

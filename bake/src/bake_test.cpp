@@ -474,6 +474,64 @@ TEST(Bake, TinyCoordinatesKeepTheAnswerRelativeToTheAmplitude) {
   EXPECT_LT(worst, 1e-6 * amplitude) << "measured 1e-7 of the amplitude";
 }
 
+// Coordinates around 1e5: the whole setup of the tiny test scaled up (a base 1e5 across, the
+// plane's height 5e3 to 2e4), not a small mesh moved far away (HugeCoordinates... above): the
+// answer must stay exact relative to the amplitude, and the normals must not feel the scale.
+TEST(Bake, CoordinatesAround1e5KeepTheAnswerRelativeToTheAmplitude) {
+  const float a = 0.1f, b = -0.05f, c = 0.05f, s = 1e5f;
+  Mesh low = test::make_grid(4, 2);
+  Mesh high = make_plane(a, b, c);
+  for (auto v : low.vertices()) low.set_point(v, low.point(v) * s);
+  for (auto v : high.vertices()) high.set_point(v, high.point(v) * s);
+  BakeOptions o;
+  o.width = o.height = 24;
+  o.front = o.back = 0.5f * s;
+  const BakeResult r = bake(low, high, o);
+  EXPECT_EQ(r.misses, 0u);
+  const Vec3f n = Vec3f(-a, -b, 1.0f).normalized();
+  double worst = 0, worst_normal = 0;
+  for (int y = 0; y < o.height; ++y)
+    for (int x = 0; x < o.width; ++x) {
+      const double u = texel_center_u(x, o.width), v = texel_center_v(y, o.height);
+      worst = std::max(worst, std::abs(r.displacement.at(x, y) - s * (a * u + b * v + c)));
+      for (int k = 0; k < 3; ++k) worst_normal = std::max(worst_normal, static_cast<double>(std::abs(r.normal_ts.at(x, y, k) - n[k])));
+    }
+  const double amplitude = s * (std::abs(a) + std::abs(b) + std::abs(c));
+  std::printf("[ 1e5 ] worst displacement error %.3g = %.3g of the amplitude %.3g; worst normal component error %.3g\n", worst,
+              worst / amplitude, amplitude, worst_normal);
+  EXPECT_LT(worst, 1e-6 * amplitude) << "measured 9e-8 of the amplitude, as at 1e-4";
+  EXPECT_LT(worst_normal, 1e-5) << "measured 3e-8";
+}
+
+// Supersampling keeps to the texel's chart: two charts side by side in UV, their border at
+// u = 0.55 inside texel 4 of 8 (u in [0.5, 0.625]); in 3D chart 0 (z = 0) lies 0.01 under the
+// high layer above it, chart 1 (z = 1) 0.03 under its own. Texel 4's centre (u = 0.5625) is
+// in chart 1; of its 2 x 2 samples (u = 0.53125 and 0.59375) the left pair falls in chart 0
+// and is left out (bake.cpp: a sample counts only inside a face of the texel's own chart), so
+// the texel reads chart 1's 0.03, not the 0.02 of a mix across the charts. With 4 x 4
+// samples, the same.
+TEST(Bake, SupersamplesInAnotherChartAreLeftOut) {
+  const Mesh low = test::make_uv_quads({{0.0f, 0.0f, 0.55f, 1.0f}, {0.55f, 0.0f, 1.0f, 1.0f}});
+  size_t charts = 0;
+  uv_charts(low, &charts);
+  ASSERT_EQ(charts, 2u);
+  const Mesh high = make_layers({{0.01f, true}, {1.03f, true}});
+  BakeOptions o;
+  o.width = 8;
+  o.height = 2;
+  o.front = o.back = 0.05f;
+  for (const int samples : {4, 16}) {
+    o.samples = samples;
+    const BakeResult r = bake(low, high, o);
+    EXPECT_EQ(r.misses, 0u);
+    for (int y = 0; y < o.height; ++y) {
+      EXPECT_NEAR(r.displacement.at(3, y), 0.01f, 1e-6f) << samples << " samples: chart 0 only";
+      EXPECT_NEAR(r.displacement.at(4, y), 0.03f, 1e-6f) << samples << " samples: chart 0's samples left out";
+      EXPECT_NEAR(r.displacement.at(5, y), 0.03f, 1e-6f) << samples << " samples: chart 1 only";
+    }
+  }
+}
+
 // Base faces whose UVs collapse (to a point, to a segment; a sliver of 1e-7 UV area) have no
 // tangent frame (or a nearly singular one) and no area in the map: nothing may turn NaN, and
 // the texels of the good chart are exactly those of the same bake without the bad faces.
@@ -643,35 +701,40 @@ TEST(Bake, SameBitsWhateverTheThreadCount) {
   auto same = [](const Image& a, const Image& b) {
     return a.pixels.size() == b.pixels.size() && std::memcmp(a.pixels.data(), b.pixels.data(), a.pixels.size() * sizeof(float)) == 0;
   };
-  for (const HitRule rule : {HitRule::nearest, HitRule::furthest, HitRule::front_else_nearest, HitRule::front_only})
-    for (const float reach : {0.0f, 0.002f}) {
-      BakeOptions o;
-      o.width = 96;
-      o.height = 64;
-      o.hit = rule;
-      o.front = o.back = reach;
-      BakeResult one;
-      {
-        const tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
-        one = bake(low, high, o);
+  // Every rule at both reaches with one sample per texel; with 4 (supersampling: more rays
+  // per texel, samples on neighbouring faces) the nearest and furthest rules.
+  for (const int samples : {1, 4})
+    for (const HitRule rule : {HitRule::nearest, HitRule::furthest, HitRule::front_else_nearest, HitRule::front_only})
+      for (const float reach : {0.0f, 0.002f}) {
+        if (samples > 1 && (reach > 0 || rule == HitRule::front_else_nearest || rule == HitRule::front_only)) continue;
+        BakeOptions o;
+        o.width = 96;
+        o.height = 64;
+        o.hit = rule;
+        o.samples = samples;
+        o.front = o.back = reach;
+        BakeResult one;
+        {
+          const tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
+          one = bake(low, high, o);
+        }
+        const BakeResult many = bake(low, high, o);
+        SCOPED_TRACE(std::string(hit_rule_name(rule)) + " reach " + std::to_string(reach) + " samples " + std::to_string(samples));
+        EXPECT_GT(one.hits, 0u);
+        EXPECT_EQ(one.hits, many.hits);
+        EXPECT_EQ(one.misses, many.misses);
+        EXPECT_EQ(one.ambiguous, many.ambiguous);
+        EXPECT_EQ(one.rays, many.rays);
+        EXPECT_EQ(one.face_texels, many.face_texels);
+        EXPECT_EQ(one.face_misses, many.face_misses);
+        EXPECT_EQ(one.face_ambiguous, many.face_ambiguous);
+        EXPECT_EQ(std::memcmp(&one.min_displacement, &many.min_displacement, sizeof(float)), 0);
+        EXPECT_EQ(std::memcmp(&one.max_displacement, &many.max_displacement, sizeof(float)), 0);
+        EXPECT_TRUE(same(one.displacement, many.displacement));
+        EXPECT_TRUE(same(one.normal_ts, many.normal_ts));
+        EXPECT_TRUE(same(one.normal_os, many.normal_os));
+        EXPECT_TRUE(same(one.coverage, many.coverage));
       }
-      const BakeResult many = bake(low, high, o);
-      SCOPED_TRACE(std::string(hit_rule_name(rule)) + " reach " + std::to_string(reach));
-      EXPECT_GT(one.hits, 0u);
-      EXPECT_EQ(one.hits, many.hits);
-      EXPECT_EQ(one.misses, many.misses);
-      EXPECT_EQ(one.ambiguous, many.ambiguous);
-      EXPECT_EQ(one.rays, many.rays);
-      EXPECT_EQ(one.face_texels, many.face_texels);
-      EXPECT_EQ(one.face_misses, many.face_misses);
-      EXPECT_EQ(one.face_ambiguous, many.face_ambiguous);
-      EXPECT_EQ(std::memcmp(&one.min_displacement, &many.min_displacement, sizeof(float)), 0);
-      EXPECT_EQ(std::memcmp(&one.max_displacement, &many.max_displacement, sizeof(float)), 0);
-      EXPECT_TRUE(same(one.displacement, many.displacement));
-      EXPECT_TRUE(same(one.normal_ts, many.normal_ts));
-      EXPECT_TRUE(same(one.normal_os, many.normal_os));
-      EXPECT_TRUE(same(one.coverage, many.coverage));
-    }
 }
 
 // rasterize_uv works in parallel bands of rows: the same samples as one band or one row at

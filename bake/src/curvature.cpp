@@ -56,7 +56,8 @@ std::vector<VertexCurvature> fit_curvature(const Mesh& mesh) {
     n.normalize();
     const Vec3d t = any_perpendicular(n), b = OpenMesh::cross(n, t);
     const Vec3d p = OpenMesh::vector_cast<Vec3d>(mesh.point(v));
-    // Gather the 1-ring, then grow to the 2-ring if the 1-ring does not determine the fit.
+    // Gather the 1-ring, then grow ring by ring (2, then 3) while the neighbourhood does not
+    // determine the fit.
     ring.clear();
     mark[static_cast<size_t>(v.idx())] = v.idx();
     for (auto w : mesh.vv_range(v)) {
@@ -66,15 +67,17 @@ std::vector<VertexCurvature> fit_curvature(const Mesh& mesh) {
     }
     Eigen::Matrix<double, 5, 1> coef;
     int rings = 0;
-    for (int r = 1; r <= 2 && rings == 0; ++r) {
-      if (r == 2) {
-        const size_t first = ring.size();
-        for (size_t i = 0; i < first; ++i)
+    size_t frontier = 0;  // the vertices the last ring added start here
+    for (int r = 1; r <= 3 && rings == 0; ++r) {
+      if (r >= 2) {
+        const size_t end = ring.size();
+        for (size_t i = frontier; i < end; ++i)
           for (auto w : mesh.vv_range(ring[i])) {
             if (mark[static_cast<size_t>(w.idx())] == v.idx()) continue;
             mark[static_cast<size_t>(w.idx())] = v.idx();
             ring.push_back(w);
           }
+        frontier = end;
       }
       if (r == 1 && ring.size() < 8) continue;  // 5 unknowns: want real redundancy
       uvh.clear();

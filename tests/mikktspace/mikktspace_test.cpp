@@ -1,8 +1,8 @@
 // meso's tangent frames against the MikkTSpace reference: the npm package `mikktspace` (a
 // WebAssembly build of the Rust port of Morten Mikkelsen's mikktspace.c), run through
 // tests/mikktspace/tangents.mjs on the same corners. Meshes with UV seams, mirrored UVs and
-// degenerate UV triangles. Skips (never fails) when node or the package is missing;
-// scripts/setup-deps installs both.
+// degenerate UV triangles. Skips when node or the package is missing (scripts/setup-deps
+// installs both), except under MESO_REQUIRE_PEERS=1 (set by scripts/test), where it fails.
 #include "meso/bake/tangent_frame.hpp"
 
 #include "test_support.hpp"
@@ -215,7 +215,12 @@ class MikkTSpaceReference : public ::testing::Test {
  protected:
   void SetUp() override {
     const std::string why = why_no_reference();
-    if (!why.empty()) GTEST_SKIP() << "MikkTSpace reference not available: " << why;
+    if (why.empty()) return;
+    // scripts/test installs the reference and sets MESO_REQUIRE_PEERS=1: there a missing
+    // reference is a failure, so CI cannot pass without comparing against it.
+    const char* require = std::getenv("MESO_REQUIRE_PEERS");
+    if (require && std::string(require) == "1") FAIL() << "MikkTSpace reference required (MESO_REQUIRE_PEERS=1) but not available: " << why;
+    GTEST_SKIP() << "MikkTSpace reference not available: " << why;
   }
 };
 

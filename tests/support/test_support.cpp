@@ -2,7 +2,10 @@
 
 #include "meso/examples/parametric.hpp"
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
+#include <cmath>
 #include <atomic>
 #include <fstream>
 #include <sstream>
@@ -152,6 +155,33 @@ Mesh without_faces(const Mesh& mesh, const std::function<bool(const Mesh&, FaceH
     out.add_face(vs);
   }
   compute_angle_weighted_normals(out);
+  return out;
+}
+
+std::vector<long> image_codes(const Image& image, double max_code) {
+  std::vector<long> codes(image.pixels.size());
+  for (size_t i = 0; i < codes.size(); ++i) codes[i] = std::lround(static_cast<double>(image.pixels[i]) * max_code);
+  return codes;
+}
+
+UpCodesCheck check_codes_decode_to_up(const std::vector<long>& codes, const Image& coverage, double max_code, const std::string& label) {
+  UpCodesCheck out;
+  const double ideal[3] = {0.5 * max_code, 0.5 * max_code, max_code};
+  EXPECT_EQ(codes.size(), 3 * coverage.texel_count()) << label << ": three channels per texel";
+  if (codes.size() != 3 * coverage.texel_count()) return out;
+  for (size_t i = 0; i < coverage.texel_count(); ++i) {
+    if (coverage.pixels[i] == 0.0f) continue;  // outside every chart
+    ++out.checked;
+    bool ok = true;
+    for (size_t c = 0; c < 3; ++c) {
+      const double off = std::abs(static_cast<double>(codes[3 * i + c]) - ideal[c]);
+      out.worst[c] = std::max(out.worst[c], off);
+      ok = ok && off <= 0.5;
+    }
+    if (!ok && out.bad++ < 5)
+      ADD_FAILURE() << label << " texel " << i % static_cast<size_t>(coverage.width) << "," << i / static_cast<size_t>(coverage.width)
+                    << ": codes " << codes[3 * i] << " " << codes[3 * i + 1] << " " << codes[3 * i + 2] << ", max " << max_code;
+  }
   return out;
 }
 

@@ -1,6 +1,7 @@
 // Helpers shared by meso's tests.
 #pragma once
 
+#include "meso/core/image.hpp"
 #include "meso/core/mesh.hpp"
 
 #include <array>
@@ -58,5 +59,20 @@ Mesh make_layers(const std::vector<std::pair<float, bool>>& layers);
 // A copy of `mesh` (positions and faces; vertices renumbered, unused ones dropped) without
 // the faces `drop` names, normals recomputed: a high surface with a hole.
 Mesh without_faces(const Mesh& mesh, const std::function<bool(const Mesh&, FaceHandle)>& drop);
+
+// The integer codes of an image read back from an 8- or 16-bit file: each value times
+// max_code (255 or 65535), rounded.
+std::vector<long> image_codes(const Image& image, double max_code);
+
+// The identity-bake check on an encoded tangent-space normal map (rgb = n * 0.5 + 0.5, as
+// codes from image_codes): every texel that `coverage` marks as inside a chart (non-zero)
+// must decode to (0, 0, 1) within half a least significant bit, i.e. its codes lie within
+// 1/2 of the exact (0.5, 0.5, 1) * max_code. Adds a test failure for the first few texels
+// that do not, naming `label`; returns the counts and the largest offsets per channel.
+struct UpCodesCheck {
+  size_t checked = 0, bad = 0;
+  double worst[3] = {0, 0, 0};  // largest |code - ideal| per channel, in LSB
+};
+UpCodesCheck check_codes_decode_to_up(const std::vector<long>& codes, const Image& coverage, double max_code, const std::string& label);
 
 }  // namespace meso::test

@@ -16,12 +16,13 @@ struct VertexCurvature {
   float k1 = 0, k2 = 0;
   // Unit principal directions in object space, in the vertex normal's tangent plane, d1 x d2 = n.
   Vec3f d1{1, 0, 0}, d2{0, 1, 0};
-  int rings = 0;                   // 1 or 2: the neighbourhood that determined the fit; 0 = none
+  int rings = 0;                   // 1, 2 or 3: the neighbourhood that determined the fit; 0 = none
 };
 
 // One per vertex. Uses the 1-ring when it has at least 8 neighbours and determines the fit
-// well (singular values within a factor 100), else the 2-ring; a vertex whose 2-ring
-// cannot determine it gets zero curvature and rings = 0. Needs vertex normals. Curvatures
+// well (singular values within a factor 100), else the 2-ring, else the 3-ring (the end of a
+// thin strip, whose 2-ring lies in two rows); a vertex whose 3-ring cannot determine it gets
+// zero curvature and rings = 0. Needs vertex normals. Curvatures
 // are those of the fitted surface at the vertex (shape operator I^-1 II); directions are
 // its principal directions projected onto the vertex normal's tangent plane.
 std::vector<VertexCurvature> fit_curvature(const Mesh& mesh);
