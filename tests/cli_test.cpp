@@ -18,6 +18,7 @@
 #include <fstream>
 #include <limits>
 #include <utility>
+#include <variant>
 
 namespace meso {
 namespace {
@@ -296,6 +297,32 @@ class Skeleton : public ::testing::Test {
 };
 test::TempDir* Skeleton::dir_ = nullptr;
 
+// A progress bar on a terminal (here a pseudo-terminal from util-linux's `script`), and none
+// when stderr is a file or with --quiet.
+TEST_F(Skeleton, BakeShowsAProgressBarOnATerminalOnly) {
+  const auto& d = *dir_;
+  const std::string bake = std::string(MESO_EXE) + " bake --low " + (d / "base.obj").string() + " --high " + (d / "high.obj").string() +
+                           " --size 64x32 -o ";
+  auto on_terminal = [&](const std::string& args) {
+    const std::string cmd = "script -qec '" + args + "' /dev/null";
+    std::string out;
+    FILE* p = ::popen(cmd.c_str(), "r");
+    if (!p) return out;
+    char buf[4096];
+    for (size_t n; (n = std::fread(buf, 1, sizeof buf, p)) > 0;) out.append(buf, n);
+    EXPECT_EQ(::pclose(p), 0) << cmd;
+    return out;
+  };
+  const std::string tty = on_terminal(bake + (d / "tty").string());
+  EXPECT_NE(tty.find("\rbake"), std::string::npos) << tty;
+  EXPECT_NE(tty.find("[" + std::string(30, '#') + "] 100.0%"), std::string::npos) << tty;
+  EXPECT_EQ(on_terminal(bake + (d / "tty_quiet").string() + " --quiet").find('\r'), std::string::npos);
+  const Result file = run("bake --low " + (d / "base.obj").string() + " --high " + (d / "high.obj").string() + " --size 64x32 -o " +
+                          (d / "not_tty").string());
+  ASSERT_EQ(file.code, 0) << file.err;
+  EXPECT_EQ(file.err.find('\r'), std::string::npos) << file.err;
+}
+
 TEST_F(Skeleton, BakeReproducesTheHeightFieldAndIsDeterministic) {
   const auto& d = *dir_;
   const Result r = run("bake --low " + (d / "base.obj").string() + " --high " + (d / "high.obj").string() + " -o " +
@@ -315,6 +342,14 @@ TEST_F(Skeleton, BakeReproducesTheHeightFieldAndIsDeterministic) {
   std::sort(err.begin(), err.end());
   EXPECT_LT(err[err.size() / 2], 0.02f * w.amplitude);
   EXPECT_LT(err[err.size() * 9 / 10], 0.2f * w.amplitude);  // bevel kinks between grid vertices
+  // The metadata says what the values are: object units, and their range (every texel holds
+  // a hit's value after the dilation, so the range is the image's).
+  ASSERT_EQ(disp.metadata.count("units"), 1u);
+  EXPECT_EQ(std::get<std::string>(disp.metadata.at("units")), "object");
+  ASSERT_EQ(disp.metadata.count("min"), 1u);
+  ASSERT_EQ(disp.metadata.count("max"), 1u);
+  EXPECT_EQ(std::get<float>(disp.metadata.at("min")), *std::min_element(disp.pixels.begin(), disp.pixels.end()));
+  EXPECT_EQ(std::get<float>(disp.metadata.at("max")), *std::max_element(disp.pixels.begin(), disp.pixels.end()));
   const Image normals = read_image(d / "maps1" / "normal_ts.png");
   EXPECT_EQ(normals.channels, 3);
 
