@@ -1332,19 +1332,8 @@ TEST(CliBake, CageLeansTheRaysAndBoundsTheirReach) {
 // far more closely (the report's displacement range over hits, --dilate 0).
 TEST(CliBake, PnBasisFollowsTheCurvedSurface) {
   test::TempDir dir;
-  auto sphere = [](int columns, int rows) {
-    Mesh m = test::make_parametric(
-        columns, rows,
-        [](double s, double t) {
-          const double a = 2 * M_PI * s, b = M_PI * (0.15 + 0.7 * t);  // a band, away from the poles
-          return Vec3f(static_cast<float>(std::sin(b) * std::cos(a)), static_cast<float>(std::sin(b) * std::sin(a)), static_cast<float>(std::cos(b)));
-        },
-        true, false);
-    for (auto v : m.vertices()) m.set_normal(v, m.point(v).normalized());
-    return m;
-  };
-  write_mesh(sphere(12, 4), dir / "low.obj");
-  write_mesh(sphere(128, 48), dir / "high.obj");
+  write_mesh(test::make_sphere_band(12, 4), dir / "low.obj");
+  write_mesh(test::make_sphere_band(128, 48), dir / "high.obj");
   auto worst = [&](const std::string& basis) {
     const Result r = run(bake_args(dir, "low.obj", "high.obj", basis, "--size 64 --dilate 0 --maps displacement --json --basis " + basis));
     EXPECT_EQ(r.code, 0) << r.err;

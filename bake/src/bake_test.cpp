@@ -251,18 +251,7 @@ TEST(Bake, MatchByNamePairsParts) {
 // A coarse sphere base over the true sphere: the flat triangles sit well inside it, the PN
 // patches (built from the radial normals) follow it far more closely.
 TEST(Bake, PnBasisFollowsTheCurvedSurface) {
-  auto sphere = [](int columns, int rows) {
-    Mesh m = test::make_parametric(
-        columns, rows,
-        [](double s, double t) {
-          const double a = 2 * M_PI * s, b = M_PI * (0.15 + 0.7 * t);  // a band, away from the poles
-          return Vec3f(static_cast<float>(std::sin(b) * std::cos(a)), static_cast<float>(std::sin(b) * std::sin(a)), static_cast<float>(std::cos(b)));
-        },
-        true, false);
-    for (auto v : m.vertices()) m.set_normal(v, m.point(v).normalized());
-    return m;
-  };
-  const Mesh base = sphere(12, 4), high = sphere(256, 96);
+  const Mesh base = test::make_sphere_band(12, 4), high = test::make_sphere_band(256, 96);
   BakeOptions o;
   o.width = o.height = 64;
   o.dilate = 0;
@@ -447,11 +436,15 @@ TEST(Bake, AHoleInTheHighMeshMissesPerBaseFace) {
   EXPECT_GT(std::count_if(expected.begin(), expected.end(), [](uint32_t n) { return n > 0; }), 1) << "several faces report";
 }
 
-// The plane case of BakePlane at a scale of 1e-4 (the whole scene, so displacements are
-// ~1e-5): the bake's offsets (ray start, bunch, reach) are relative to the meshes' size, so
-// the error stays a small fraction of the amplitude.
-TEST(Bake, TinyCoordinatesKeepTheAnswerRelativeToTheAmplitude) {
-  const float a = 0.1f, b = -0.05f, c = 0.05f, s = 1e-4f;
+// The plane case of BakePlane with the whole scene scaled by s (base, high surface and
+// reach): the worst displacement error as a fraction of the amplitude, and the worst error
+// of a tangent-space normal component. The bake's offsets (ray start, bunch, reach) are
+// relative to the meshes' size, so neither may feel the scale.
+struct ScaledPlaneErrors {
+  double displacement = 0, normal = 0;
+};
+ScaledPlaneErrors bake_scaled_plane(float s) {
+  const float a = 0.1f, b = -0.05f, c = 0.05f;
   Mesh low = test::make_grid(4, 2);
   Mesh high = make_plane(a, b, c);
   for (auto v : low.vertices()) low.set_point(v, low.point(v) * s);
@@ -462,45 +455,32 @@ TEST(Bake, TinyCoordinatesKeepTheAnswerRelativeToTheAmplitude) {
   const BakeResult r = bake(low, high, o);
   EXPECT_EQ(r.misses, 0u);
   const Vec3f n = Vec3f(-a, -b, 1.0f).normalized();
-  double worst = 0;
+  ScaledPlaneErrors e;
   for (int y = 0; y < o.height; ++y)
     for (int x = 0; x < o.width; ++x) {
       const double u = texel_center_u(x, o.width), v = texel_center_v(y, o.height);
-      worst = std::max(worst, std::abs(r.displacement.at(x, y) - s * (a * u + b * v + c)));
-      for (int k = 0; k < 3; ++k) ASSERT_NEAR(r.normal_ts.at(x, y, k), n[k], 1e-5f) << x << "," << y;
+      e.displacement = std::max(e.displacement, std::abs(r.displacement.at(x, y) - s * (a * u + b * v + c)));
+      for (int k = 0; k < 3; ++k) e.normal = std::max(e.normal, static_cast<double>(std::abs(r.normal_ts.at(x, y, k) - n[k])));
     }
-  const double amplitude = s * (std::abs(a) + std::abs(b) + std::abs(c));
-  std::printf("[ tiny ] worst displacement error %.3g = %.3g of the amplitude %.3g\n", worst, worst / amplitude, amplitude);
-  EXPECT_LT(worst, 1e-6 * amplitude) << "measured 1e-7 of the amplitude";
+  e.displacement /= s * (std::abs(a) + std::abs(b) + std::abs(c));
+  std::printf("[ scale %g ] worst displacement error %.3g of the amplitude, worst normal component error %.3g\n", static_cast<double>(s),
+              e.displacement, e.normal);
+  return e;
 }
 
-// Coordinates around 1e5: the whole setup of the tiny test scaled up (a base 1e5 across, the
-// plane's height 5e3 to 2e4), not a small mesh moved far away (HugeCoordinates... above): the
-// answer must stay exact relative to the amplitude, and the normals must not feel the scale.
+// At a scale of 1e-4 (displacements ~1e-5).
+TEST(Bake, TinyCoordinatesKeepTheAnswerRelativeToTheAmplitude) {
+  const ScaledPlaneErrors e = bake_scaled_plane(1e-4f);
+  EXPECT_LT(e.displacement, 1e-6) << "measured 1e-7 of the amplitude";
+  EXPECT_LT(e.normal, 1e-5);
+}
+
+// Coordinates around 1e5: the whole setup scaled up (a base 1e5 across, the plane's height
+// 5e3 to 2e4), not a small mesh moved far away (HugeCoordinates... above).
 TEST(Bake, CoordinatesAround1e5KeepTheAnswerRelativeToTheAmplitude) {
-  const float a = 0.1f, b = -0.05f, c = 0.05f, s = 1e5f;
-  Mesh low = test::make_grid(4, 2);
-  Mesh high = make_plane(a, b, c);
-  for (auto v : low.vertices()) low.set_point(v, low.point(v) * s);
-  for (auto v : high.vertices()) high.set_point(v, high.point(v) * s);
-  BakeOptions o;
-  o.width = o.height = 24;
-  o.front = o.back = 0.5f * s;
-  const BakeResult r = bake(low, high, o);
-  EXPECT_EQ(r.misses, 0u);
-  const Vec3f n = Vec3f(-a, -b, 1.0f).normalized();
-  double worst = 0, worst_normal = 0;
-  for (int y = 0; y < o.height; ++y)
-    for (int x = 0; x < o.width; ++x) {
-      const double u = texel_center_u(x, o.width), v = texel_center_v(y, o.height);
-      worst = std::max(worst, std::abs(r.displacement.at(x, y) - s * (a * u + b * v + c)));
-      for (int k = 0; k < 3; ++k) worst_normal = std::max(worst_normal, static_cast<double>(std::abs(r.normal_ts.at(x, y, k) - n[k])));
-    }
-  const double amplitude = s * (std::abs(a) + std::abs(b) + std::abs(c));
-  std::printf("[ 1e5 ] worst displacement error %.3g = %.3g of the amplitude %.3g; worst normal component error %.3g\n", worst,
-              worst / amplitude, amplitude, worst_normal);
-  EXPECT_LT(worst, 1e-6 * amplitude) << "measured 9e-8 of the amplitude, as at 1e-4";
-  EXPECT_LT(worst_normal, 1e-5) << "measured 3e-8";
+  const ScaledPlaneErrors e = bake_scaled_plane(1e5f);
+  EXPECT_LT(e.displacement, 1e-6) << "measured 9e-8 of the amplitude, as at 1e-4";
+  EXPECT_LT(e.normal, 1e-5) << "measured 3e-8";
 }
 
 // Supersampling keeps to the texel's chart: two charts side by side in UV, their border at

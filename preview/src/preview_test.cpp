@@ -781,6 +781,19 @@ TEST(Measure, ExactAndTessellatedReferencesAgreeOnATilingMap) {
   }
 }
 
+// The measure tests' comparison: 96 x 96 pixels at azimuth 35 degrees, one repetition.
+CompareOptions measure_options(std::vector<std::string> methods, float view_angle, float zoom, int iterations) {
+  CompareOptions o;
+  o.methods = std::move(methods);
+  o.view.width = o.view.height = 96;
+  o.view.camera.view_angle = view_angle;
+  o.view.camera.azimuth = 35.0f;
+  o.view.camera.zoom = zoom;
+  o.view.iterations = iterations;
+  o.repetitions = 1;
+  return o;
+}
+
 PreviewMaps rough_maps_with_sdf() {
   PreviewMaps maps = cone_maps(ConeScene::rough, Border::clamp);
   const HeightField field = make_height_field(maps.displacement, Border::clamp);
@@ -795,15 +808,9 @@ TEST(Measure, SearchMethodsAgreeWithTheReference) {
   const Mesh quad = test::make_grid(1, 1);
   const PreviewMaps maps = rough_maps_with_sdf();
   for (float angle : {30.0f, 45.0f}) {
-    CompareOptions o;
-    o.methods = {"mesh", "tessellation", "bump", "parallax", "offset-limited", "slope", "iterative-parallax", "steep",
-                 "relief", "pom", "cone", "relaxed-cone", "pyramid", "sphere-tracing", "dig"};
-    o.view.width = o.view.height = 96;
-    o.view.camera.view_angle = angle;
-    o.view.camera.azimuth = 35.0f;
-    o.view.camera.zoom = angle > 40 ? 5.0f : 3.0f;
-    o.view.iterations = 256;
-    o.repetitions = 1;
+    const CompareOptions o = measure_options({"mesh", "tessellation", "bump", "parallax", "offset-limited", "slope", "iterative-parallax", "steep",
+                                              "relief", "pom", "cone", "relaxed-cone", "pyramid", "sphere-tracing", "dig"},
+                                             angle, angle > 40 ? 5.0f : 3.0f, 256);
     const Comparison c = compare_methods(quad, maps, o);
     ASSERT_EQ(c.methods.size(), o.methods.size());
     // The quad is flat: all of it is intersected exactly, one piece per texel cell.
@@ -867,14 +874,7 @@ TEST(Measure, LitImagesAgreeWithATiltedNormalMap) {
       maps.normal_ts.at(x, y, 1) = 0.5f * ny + 0.5f;
       maps.normal_ts.at(x, y, 2) = 0.5f * nz + 0.5f;
     }
-  CompareOptions o;
-  o.methods = {"mesh", "cone", "pyramid"};
-  o.view.width = o.view.height = 96;
-  o.view.camera.view_angle = 30.0f;
-  o.view.camera.azimuth = 35.0f;
-  o.view.camera.zoom = 3.0f;
-  o.view.iterations = 256;
-  o.repetitions = 1;
+  const CompareOptions o = measure_options({"mesh", "cone", "pyramid"}, 30.0f, 3.0f, 256);
   const Comparison c = compare_methods(quad, maps, o);
   for (const MethodComparison& m : c.methods) {
     std::printf("%s: wrong hits %.4f, rmse %.5f\n", m.name.c_str(), m.wrong_hit_fraction, m.rmse);
@@ -1077,14 +1077,7 @@ TEST(Measure, VdmAgreesWithTheReferenceOnAFlatBase) {
   const auto [lo, hi] = std::minmax_element(maps.displacement.pixels.begin(), maps.displacement.pixels.end());
   vdm.relief = *hi - *lo;  // object units = units of u on the unit quad
   add_vdm(maps, Border::wrap, vdm, 1e-4);
-  CompareOptions o;
-  o.methods = {"vdm", "pom", "bump"};
-  o.view.width = o.view.height = 96;
-  o.view.camera.view_angle = 40.0f;
-  o.view.camera.azimuth = 35.0f;
-  o.view.camera.zoom = 3.0f;
-  o.view.iterations = 64;
-  o.repetitions = 1;
+  const CompareOptions o = measure_options({"vdm", "pom", "bump"}, 40.0f, 3.0f, 64);
   const Comparison c = compare_methods(quad, maps, o);
   for (const MethodComparison& m : c.methods)
     std::printf("vdm test: %-5s wrong hits %.4f, rmse %.4f, fetches %.1f\n", m.name.c_str(), m.wrong_hit_fraction, m.rmse, m.mean_iterations);

@@ -113,6 +113,18 @@ Mesh make_parametric(int columns, int rows, const std::function<Vec3f(double, do
   return make_parametric_surface(columns, rows, surface, wrap_s, wrap_t);
 }
 
+Mesh make_sphere_band(int columns, int rows) {
+  Mesh m = make_parametric(
+      columns, rows,
+      [](double s, double t) {
+        const double a = 2 * M_PI * s, b = M_PI * (0.15 + 0.7 * t);
+        return Vec3f(static_cast<float>(std::sin(b) * std::cos(a)), static_cast<float>(std::sin(b) * std::sin(a)), static_cast<float>(std::cos(b)));
+      },
+      true, false);
+  for (auto v : m.vertices()) m.set_normal(v, m.point(v).normalized());
+  return m;
+}
+
 Mesh make_plane(float a, float b, float c) {
   Mesh m = make_grid(8, 8, 2.0f, 2.0f);
   for (auto v : m.vertices()) {

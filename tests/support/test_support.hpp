@@ -48,6 +48,11 @@ Mesh make_uv_quads(const std::vector<std::array<float, 4>>& boxes);
 // surface; UVs then have a seam there). Normals: angle-weighted.
 Mesh make_parametric(int columns, int rows, const std::function<Vec3f(double, double)>& surface, bool wrap_s, bool wrap_t);
 
+// The unit sphere's band between 27 and 153 degrees from +z (away from the poles), a
+// (columns x rows)-quad grid closed around z, with radial vertex normals: coarse, a base whose
+// flat triangles sit inside the sphere; fine, the high surface.
+Mesh make_sphere_band(int columns, int rows);
+
 // The plane z = a x + b y + c over [-0.5, 1.5]^2 (an 8 x 8 grid, UV = (x + 0.5, y + 0.5) / 2),
 // normals from the faces: the high surface of bake tests over a unit base quad.
 Mesh make_plane(float a, float b, float c);
