@@ -124,6 +124,26 @@ void add_preview(CLI::App& app, Context& ctx) {
                   "dstream: vertices nearer than this (object units) take the level drawn (the finest within --iterations segments per "
                   "edge), farther than twice this the coarser level's surface, morphing between (0: no morph)")
       ->check(CLI::NonNegativeNumber & Finite);
+  sub->add_option("--binary-steps", args->options.binary_steps, "relief: halvings of the step that crossed the surface (default 8)")
+      ->check(CLI::Range(0, 64));
+  sub->add_option("--bisection-steps", args->options.bisection_steps,
+                  "relaxed-cone: halvings of the cone step that crossed the surface (default 24)")
+      ->check(CLI::Range(0, 64));
+  sub->add_option("--dig-epsilon", args->options.dig_epsilon,
+                  "dig: least widening of a block's depth interval above its corners' (epsilon_1), fraction of the height range (default 0.1)")
+      ->check(CLI::Range(0.0, 1.0) & Finite);
+  sub->add_option("--tess-displacement", args->options.tess_displacement,
+                  "tessellation: cut an edge per texel where the displacement along it departs from linear by more than this "
+                  "fraction of the height range (default 0.02)")
+      ->check(CLI::NonNegativeNumber & Finite);
+  sub->add_option("--tess-normal-angle", args->options.tess_normal_angle,
+                  "tessellation: at least one segment per this many degrees between an edge's end normals (default 5)")
+      ->check(CLI::Range(0.01, 360.0) & Finite);
+  sub->add_option("--tess-pixels", args->options.tess_pixels, "tessellation: no segment shorter than this on screen, pixels (default 2)")
+      ->check(CLI::Range(0.01, 1e6) & Finite);
+  sub->add_option("--tess-samples", args->options.tess_edge_samples,
+                  "tessellation: intervals at which an edge's displacement is sampled for the departure test (default 8)")
+      ->check(CLI::Range(1, 64));
   sub->add_option("--turntable", args->turntable,
                   "With --headless: N frames around the mesh (azimuth from --azimuth in steps of 360/N), written as "
                   "PNG_000.png, PNG_001.png, ... from --png PNG.png")

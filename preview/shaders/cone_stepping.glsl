@@ -80,7 +80,7 @@ float cone_trace(vec3 dir, bool relaxed) {
     if (relaxed && grid_surface(q.xy) >= q.z) {
       // The step crossed the surface once (the relaxed cone's guarantee): bisect it.
       float lo = t, hi = tq;
-      for (int it = 0; it < kConeBisectionSteps; ++it) {
+      for (int it = 0; it < u_bisection_steps; ++it) {
         float mid = 0.5 * (lo + hi);
         vec3 r = o + mid * d;
         if (grid_surface(r.xy) >= r.z) hi = mid;

@@ -8,7 +8,7 @@
 // mesh is; and the fetches it took. Pass 2 (u_dig_pass = 2) bounds each pixel's search to the
 // interval of its block's four corner depths (eq. 1), widened by epsilon_1 = one pass-1 step
 // above (the stored sample may be that far above the crossing, section 4.2), at least
-// kDigEpsilon, and epsilon_2 = one step below, then searches it linearly with the same step height (section 5.1, eq. 2:
+// u_dig_epsilon, and epsilon_2 = one step below, then searches it linearly with the same step height (section 5.1, eq. 2:
 // a fixed step, so a short interval takes few steps) and refines by one secant step. The
 // budget u_iterations is the number of linear steps over the whole slab in either pass at
 // grazing angles, adapted to the view as POM's (dig_steps).
@@ -17,11 +17,12 @@
 uniform int u_dig_pass;     // 1: the grid, 2: the image
 uniform sampler2D u_dig;    // pass 1's output: R = corner depth (-1: no mesh), G = fetches
 const int kDigBlock = 4;
-// epsilon_1 at least this much of the slab (eq. 1's bias for approximation error): a feature
-// narrower than a block that rises above all four corner rays is still found when it rises
-// less than this. Measured on minified maps (a pixel over ~4 texels): 0.1 lowers the wrong
-// hits of rocks at 60 degrees from 1.7 % to 1.3 % at 16 steps for +0.5 fetches per pixel.
-const float kDigEpsilon = 0.1;
+// epsilon_1 at least this much of the slab (eq. 1's bias for approximation error;
+// PreviewOptions::dig_epsilon): a feature narrower than a block that rises above all four
+// corner rays is still found when it rises less than this. Measured on minified maps (a pixel
+// over ~4 texels): the default 0.1 lowers the wrong hits of rocks at 60 degrees from 1.7 % to
+// 1.3 % at 16 steps for +0.5 fetches per pixel.
+uniform float u_dig_epsilon;
 
 // Object length s along the view ray at which it has normalised depth z.
 float dig_s(vec3 dir, float z) { return mix(u_h_min, u_h_max, z) / dir.z; }
@@ -64,7 +65,7 @@ float dig_trace(vec3 dir, out float amortised) {
   // rounded from their own directions (dig_steps): up to one fewer than this pixel's.
   float corner_step = 1.0 / float(max(steps - 1, 1));
   // Silhouette blocks (a corner off the mesh) search the whole slab.
-  float top = known ? min(1.0, hi + max(corner_step, kDigEpsilon)) : 1.0;
+  float top = known ? min(1.0, hi + max(corner_step, u_dig_epsilon)) : 1.0;
   float bottom = known ? max(0.0, lo - corner_step) : 0.0;
   float s_prev = dig_s(dir, top);
   float d_prev = dir.z * s_prev - height_at(v_uv + dir.xy * s_prev);  // ray height minus surface height

@@ -124,7 +124,7 @@ bool footprint_hit(ivec2 cell, vec3 o, vec3 d, float t0, float t1, out float t_h
     if ((A * L + B) * L + C >= 0.0) {
       // Rounding hid the root: bisect the sign change.
       float lo = 0.0, hi = L;
-      for (int it = 0; it < kConeBisectionSteps; ++it) {
+      for (int it = 0; it < kRootBisectionSteps; ++it) {
         float mid = 0.5 * (lo + hi);
         if ((A * mid + B) * mid + C >= 0.0) hi = mid;
         else lo = mid;

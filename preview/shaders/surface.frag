@@ -133,7 +133,7 @@ void main() {
             s_hit = mix(s_prev, s, clamp(w, 0.0, 1.0));
           } else {
             float above = s_prev, below = s;
-            for (int j = 0; j < kReliefBinarySteps; ++j) {
+            for (int j = 0; j < u_binary_steps; ++j) {
               float mid = 0.5 * (above + below);
               if (dir.z * mid + bend * mid * mid - height_at(v_uv + dir.xy * mid) <= 0.0) below = mid;
               else above = mid;

@@ -59,7 +59,8 @@ uniform int u_stream_wrap;     // 1: border wrap (the map tiles), 0: clamp
 const int kMesh = 0, kTessellation = 1, kBump = 2, kParallax = 3, kOffsetLimited = 4, kSlope = 5,
           kIterativeParallax = 6, kSteep = 7, kRelief = 8, kPom = 9, kCone = 10, kRelaxedCone = 11,
           kPyramid = 12, kSphereTracing = 13, kDig = 14, kVdm = 15, kDstream = 16;
-const int kReliefBinarySteps = 8;
+uniform int u_binary_steps;      // relief: halvings after the linear search (PreviewOptions::binary_steps)
+uniform int u_bisection_steps;   // relaxed-cone: halvings of the step that crossed the surface
 
 // Linear-search steps over the whole slab, adapted to the view (survey section 4.4.2, POM
 // after Tatarchuk; DIG-DM's "adaptive linear search", its section 5): the budget at grazing
@@ -69,7 +70,9 @@ int view_adapted_steps(int budget, vec3 dir) {
   float b = float(max(budget, 1));
   return max(1, int(round(mix(b, max(0.25 * b, 1.0), clamp(-dir.z, 0.0, 1.0)))));
 }
-const int kConeBisectionSteps = 24;  // relaxed cones: halvings of the step that crossed the surface
+// Halvings of a cell's root interval where rounding hid a quadratic's root (footprint.glsl):
+// numerical, not a quality knob (2^-24 of the step: float's resolution).
+const int kRootBisectionSteps = 24;
 const float kConeFar = 1e30;
 
 layout(location = 0) out vec4 out_color;

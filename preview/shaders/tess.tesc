@@ -3,9 +3,9 @@
 //   mesh (u_tess_mode 0): brute force, one segment per texel along every edge (the
 //     displacement map's resolution; GL caps a level at 64 segments).
 //   tessellation (u_tess_mode 1): adaptive edge tests (survey section 3): an edge is cut per
-//     texel where the displacement along it departs from linear, at least every 5 degrees of
-//     normal change, never into segments shorter than 2 pixels on screen, and into at most
-//     u_iterations segments.
+//     texel where the displacement along it departs from linear (by u_tess_displacement of
+//     the height range), at least every u_tess_normal_angle of normal change, never into
+//     segments shorter than u_tess_pixels on screen, and into at most u_iterations segments.
 // Each level is a function of its edge alone, evaluated the same way from both triangles
 // (endpoints in a canonical order), so neighbours cut a shared edge alike: no cracks.
 layout(vertices = 3) out;
@@ -29,11 +29,14 @@ uniform int u_tess_mode;
 uniform int u_iterations;
 uniform float u_h_min;
 uniform float u_h_max;
+// The adaptive tests' knobs (PreviewOptions::tess_*).
+uniform int u_tess_edge_samples;    // intervals sampled along an edge
+uniform float u_tess_displacement;  // fraction of the height range
+uniform float u_tess_normal_angle;  // radians
+uniform float u_tess_pixels;        // shortest segment on screen, pixels
 
 // Height fetches made by the tessellation stages (read back for the fetch statistics).
 layout(std430, binding = 0) buffer VertexWork { uint vertex_fetches; };
-
-const int kEdgeSamples = 8;
 
 bool before(vec3 a, vec3 b) { return a.x < b.x || (a.x == b.x && (a.y < b.y || (a.y == b.y && a.z < b.z))); }
 
@@ -49,19 +52,19 @@ float edge_level(int i, int j) {
   // Displacement change: the largest departure from the straight line between the ends.
   float ha = textureLod(u_height, c_uv[i], 0.0).r, hb = textureLod(u_height, c_uv[j], 0.0).r;
   float departure = 0.0;
-  for (int k = 1; k < kEdgeSamples; ++k) {
-    float t = float(k) / float(kEdgeSamples);
+  for (int k = 1; k < u_tess_edge_samples; ++k) {
+    float t = float(k) / float(u_tess_edge_samples);
     departure = max(departure, abs(textureLod(u_height, mix(c_uv[i], c_uv[j], t), 0.0).r - mix(ha, hb, t)));
   }
-  atomicAdd(vertex_fetches, uint(kEdgeSamples + 1));
-  float need = departure > 0.02 * (u_h_max - u_h_min) ? per_texel : 1.0;
+  atomicAdd(vertex_fetches, uint(u_tess_edge_samples + 1));
+  float need = departure > u_tess_displacement * (u_h_max - u_h_min) ? per_texel : 1.0;
   // Normal change.
   vec3 na = c_normal[i], nb = c_normal[j];
   float cosine = dot(na, nb) / max(length(na) * length(nb), 1e-30);
-  need = max(need, ceil(acos(clamp(cosine, -1.0, 1.0)) / radians(5.0)));
-  // Screen-space length: no segment shorter than 2 pixels (ends behind the eye: no limit).
+  need = max(need, ceil(acos(clamp(cosine, -1.0, 1.0)) / u_tess_normal_angle));
+  // Screen-space length: no segment shorter than u_tess_pixels (ends behind the eye: no limit).
   vec4 a = u_view_projection * vec4(c_position[i], 1.0), b = u_view_projection * vec4(c_position[j], 1.0);
-  if (a.w > 0.0 && b.w > 0.0) need = min(need, max(ceil(length((a.xy / a.w - b.xy / b.w) * 0.5 * u_viewport) / 2.0), 1.0));
+  if (a.w > 0.0 && b.w > 0.0) need = min(need, max(ceil(length((a.xy / a.w - b.xy / b.w) * 0.5 * u_viewport) / u_tess_pixels), 1.0));
   return clamp(need, 1.0, clamp(float(u_iterations), 1.0, 64.0));
 }
 

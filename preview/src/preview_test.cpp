@@ -957,6 +957,101 @@ TEST(Measure, FetchCounts) {
   }
 }
 
+// The methods' other quality knobs (PreviewOptions) do what preview.hpp says, measured by
+// their fetches: relief's halvings and relaxed cones' bisections cost their count wherever a
+// crossing is refined and nothing elsewhere; a wider DIG interval costs fetches; the edge
+// tests' samples, thresholds and screen length set how many vertices tessellation makes.
+TEST(Measure, QualityKnobsDoWhatTheySay) {
+  const Mesh quad = test::make_grid(1, 1);
+  const PreviewMaps maps = rough_maps_with_sdf();
+  HeadlessPreview gpu(quad, maps);
+  auto fetches = [&](const PreviewOptions& o) {
+    Image f;
+    gpu.render(o, &f);
+    return f;
+  };
+  auto mean = [](const Image& f) {
+    double sum = 0;
+    size_t n = 0;
+    for (size_t i = 0; i < f.texel_count(); ++i)
+      if (f.pixels[2 * i + 1] > 0.5f) sum += f.pixels[2 * i], ++n;
+    return n ? sum / static_cast<double>(n) : 0.0;
+  };
+  // Per pixel: the fetches of `o` with knob value k, minus those with 0, are 0 or k times one
+  // pixel's unit cost (the same for every refined pixel); returns the refined pixels.
+  auto refined_pixels = [&](PreviewOptions o, int PreviewOptions::*knob, int k) {
+    o.*knob = 0;
+    const Image none = fetches(o);
+    o.*knob = k;
+    const Image some = fetches(o);
+    size_t refined = 0;
+    float unit = 0;
+    for (size_t i = 0; i < none.texel_count(); ++i) {
+      const float d = some.pixels[2 * i] - none.pixels[2 * i];
+      if (d == 0.0f) continue;
+      if (unit == 0.0f) unit = d / static_cast<float>(k);
+      EXPECT_EQ(d, unit * static_cast<float>(k)) << "pixel " << i;
+      ++refined;
+    }
+    EXPECT_GE(unit, 1.0f);
+    return refined;
+  };
+  const PreviewOptions relief = view_options("relief", 45.0f, 35.0f, 32, PreviewShade::uv);
+  EXPECT_GT(refined_pixels(relief, &PreviewOptions::binary_steps, 3), relief.width * relief.height / 4);
+  const PreviewOptions relaxed = view_options("relaxed-cone", 45.0f, 35.0f, 256, PreviewShade::uv);
+  EXPECT_GT(refined_pixels(relaxed, &PreviewOptions::bisection_steps, 5), 0u);
+  EXPECT_EQ(refined_pixels(relaxed, &PreviewOptions::bisection_steps, 5), refined_pixels(relaxed, &PreviewOptions::bisection_steps, 20));
+
+  PreviewOptions dig = view_options("dig", 60.0f, 35.0f, 32, PreviewShade::uv);
+  dig.dig_epsilon = 0.0f;
+  const double dig_0 = mean(fetches(dig));
+  dig.dig_epsilon = 0.1f;
+  const double dig_default = mean(fetches(dig));
+  dig.dig_epsilon = 1.0f;
+  const double dig_1 = mean(fetches(dig));
+  std::printf("dig mean fetches: %.2f, %.2f, %.2f at epsilon 0, 0.1, 1\n", dig_0, dig_default, dig_1);
+  EXPECT_LE(dig_0, dig_default);
+  EXPECT_LT(dig_default, dig_1);
+
+  auto vertex_fetches = [&](HeadlessPreview& g, const PreviewOptions& o) {
+    Image f;
+    g.render(o, &f);
+    double sum = 0;
+    for (size_t i = 0; i < f.texel_count(); ++i) sum += f.pixels[2 * i];
+    return sum;
+  };
+  // Two triangles, three edge tests each with samples + 1 fetches, plus 6 corners when no
+  // edge is cut: the displacement threshold out of reach or segments of a million pixels.
+  PreviewOptions tess = view_options("tessellation", 45.0f, 35.0f, 64, PreviewShade::uv);
+  const double tess_default = vertex_fetches(gpu, tess);
+  tess.tess_edge_samples = 3;
+  const double tess_3 = vertex_fetches(gpu, tess);
+  tess.tess_displacement = 1e6f;
+  EXPECT_NEAR(vertex_fetches(gpu, tess), 2 * 3 + 2 * 3 * 4, 0.5);
+  tess.tess_displacement = 0.02f;
+  tess.tess_pixels = 1e6f;
+  EXPECT_NEAR(vertex_fetches(gpu, tess), 2 * 3 + 2 * 3 * 4, 0.5);
+  tess.tess_pixels = 8.0f;
+  const double tess_8px = vertex_fetches(gpu, tess);
+  std::printf("tessellation vertex fetches: %.0f default, %.0f with 3 samples, %.0f with 8-pixel segments\n", tess_default, tess_3,
+              tess_8px);
+  EXPECT_GT(tess_3, 2 * 3 + 2 * 3 * 4 + 100.0);
+  EXPECT_LT(tess_8px, tess_3 / 2);
+  // Normal change alone (the displacement test out of reach) on a curved base: finer angles,
+  // more vertices; on the flat quad none.
+  const Mesh band = test::make_sphere_band(8, 4);
+  HeadlessPreview band_gpu(band, maps);
+  PreviewOptions curved = view_options("tessellation", 30.0f, 35.0f, 64, PreviewShade::uv);
+  curved.tess_displacement = 1e6f;
+  curved.tess_pixels = 0.01f;
+  curved.tess_normal_angle = 30.0f;
+  const double coarse = vertex_fetches(band_gpu, curved);
+  curved.tess_normal_angle = 2.0f;
+  const double fine = vertex_fetches(band_gpu, curved);
+  std::printf("sphere band vertex fetches: %.0f at 30 degrees, %.0f at 2 degrees\n", coarse, fine);
+  EXPECT_GT(fine, 4 * coarse);
+}
+
 // The per-vertex methods fetch in the vertex stages: one height per generated vertex (plus
 // the adaptive edge tests' samples), spread over the mesh's pixels. The brute-force mesh
 // generates a vertex per texel whatever the budget; adaptive tessellation no more vertices

@@ -708,6 +708,11 @@ void SurfaceRenderer::draw(const PreviewOptions& o, int width, int height) {
   glUniform1f(glGetUniformLocation(prog, "u_h_min"), h_min_);
   glUniform1i(glGetUniformLocation(prog, "u_silhouettes"), o.silhouettes ? 1 : 0);
   glUniform1f(glGetUniformLocation(prog, "u_h_max"), h_max_);
+  // The methods' own knobs, clamped to the ranges preview.hpp documents (a uniform a program
+  // does not have is located at -1, which glUniform ignores).
+  glUniform1i(glGetUniformLocation(prog, "u_binary_steps"), std::clamp(o.binary_steps, 0, 64));
+  glUniform1i(glGetUniformLocation(prog, "u_bisection_steps"), std::clamp(o.bisection_steps, 0, 64));
+  glUniform1f(glGetUniformLocation(prog, "u_dig_epsilon"), std::isfinite(o.dig_epsilon) ? std::clamp(o.dig_epsilon, 0.0f, 1.0f) : 0.1f);
   const int cone = o.method == "cone" ? 0 : o.method == "relaxed-cone" ? 1 : -1;
   const bool pyramid = o.method == "pyramid";
   const bool stream_missing = o.method == "sphere-tracing" ? !sdf_tex_
@@ -811,6 +816,11 @@ void SurfaceRenderer::draw(const PreviewOptions& o, int width, int height) {
   } else if (per_vertex) {
     glUniform1i(glGetUniformLocation(prog, "u_tess_mode"), o.method == "mesh" ? 0 : 1);
     glUniform2f(glGetUniformLocation(prog, "u_viewport"), static_cast<float>(width), static_cast<float>(height));
+    auto positive = [](float v, float fallback) { return std::isfinite(v) && v > 0 ? v : fallback; };
+    glUniform1i(glGetUniformLocation(prog, "u_tess_edge_samples"), std::clamp(o.tess_edge_samples, 1, 64));
+    glUniform1f(glGetUniformLocation(prog, "u_tess_displacement"), std::isfinite(o.tess_displacement) ? std::max(o.tess_displacement, 0.0f) : 0.02f);
+    glUniform1f(glGetUniformLocation(prog, "u_tess_normal_angle"), positive(o.tess_normal_angle, 5.0f) * 3.14159265f / 180.0f);
+    glUniform1f(glGetUniformLocation(prog, "u_tess_pixels"), positive(o.tess_pixels, 2.0f));
     const GLuint zero = 0;
     glBindBuffer(GL_SHADER_STORAGE_BUFFER, vertex_work_);
     glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, sizeof zero, &zero);

@@ -134,6 +134,24 @@ struct PreviewOptions {
   // twice that on (lod_distance 0: no morph).
   float morph = -1.0f;
   float lod_distance = 0.0f;
+  // The methods' other quality knobs (the defaults are the ones docs/benchmarks.md measures;
+  // out-of-range values are clamped to the ranges given):
+  // relief: halvings of the linear-search step that crossed the surface (survey 4.4.1), 0..64.
+  int binary_steps = 8;
+  // relaxed-cone: halvings of the cone step that crossed the surface (survey 4.4.3), 0..64.
+  int bisection_steps = 24;
+  // dig: the least widening of a block's depth interval above its corners' depths (the depth-
+  // interval-grid paper's epsilon_1, eq. 1), as a fraction of the slab's height, 0..1.
+  float dig_epsilon = 0.1f;
+  // tessellation's adaptive edge tests (survey section 3; tess.tesc): an edge is cut at every
+  // texel where the displacement sampled at tess_edge_samples + 1 points along it (1..64)
+  // departs from the straight line between its ends by more than tess_displacement of the
+  // height range; at least every tess_normal_angle degrees (> 0) of change between its end
+  // normals; never into segments shorter than tess_pixels on screen (> 0).
+  float tess_displacement = 0.02f;
+  float tess_normal_angle = 5.0f;
+  float tess_pixels = 2.0f;
+  int tess_edge_samples = 8;
 };
 
 // Method names this build renders: per vertex mesh, tessellation; per pixel in the order of
