@@ -297,19 +297,18 @@ void run_window(const Mesh& base, const PreviewMaps& maps, const PreviewOptions&
     if (key == GLFW_KEY_ESCAPE || key == GLFW_KEY_Q) glfwSetWindowShouldClose(w, GLFW_TRUE);
   });
   SurfaceRenderer renderer(base, maps);
+  double ms = 0;
   while (!glfwWindowShouldClose(window)) {
     const auto t0 = std::chrono::steady_clock::now();
     int w = 0, h = 0;
     glfwGetFramebufferSize(window, &w, &h);
-    if (w > 0 && h > 0) renderer.draw(state.options, w, h);
+    // The on-screen line shows the previous frame's time (this one's is not known yet).
+    PreviewOptions frame = state.options;
+    frame.status_line = preview_status_line(state.options, ms);
+    if (w > 0 && h > 0) renderer.draw(frame, w, h);
     glFinish();
-    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    char title[256];
-    static const char* const shadow_names[3] = {"no shadows", "hard shadows", "soft shadows"};
-    std::snprintf(title, sizeof title, "meso preview | %s | %d iterations | view %.1f deg | %s%s | %.2f ms", state.options.method.c_str(),
-                  state.options.iterations, static_cast<double>(state.options.camera.view_angle),
-                  shadow_names[static_cast<int>(state.options.shadows)], state.options.silhouettes ? " | silhouettes" : "", ms);
-    glfwSetWindowTitle(window, title);
+    ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    glfwSetWindowTitle(window, ("meso preview | " + preview_status_line(state.options, ms)).c_str());
     glfwSwapBuffers(window);
     glfwWaitEventsTimeout(0.1);
   }

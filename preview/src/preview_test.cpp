@@ -176,6 +176,44 @@ TEST(Preview, PanSlidesTheViewAcrossTheScreen) {
 
 // Every method, straight on and at 89.9 degrees, on a rough height field over a curved base:
 // finite pixels only, and the mesh where it should be.
+// The window's on-screen line: what it says, and that drawing it changes only the top left of
+// the frame (white glyphs on a dark band) and none of the fetch counts.
+TEST(Preview, StatusLineIsDrawnAtTheTopLeftOnly) {
+  PreviewOptions o = uv_view(256, 30.0f, 0.0f);
+  o.method = "relief";
+  o.shade = PreviewShade::lit;
+  const std::string line = preview_status_line(o, 12.345);
+  EXPECT_NE(line.find("relief"), std::string::npos) << line;
+  EXPECT_NE(line.find("8 halvings"), std::string::npos) << line;
+  EXPECT_NE(line.find("12.35 ms"), std::string::npos) << line;
+  o.method = "tessellation";
+  EXPECT_NE(preview_status_line(o, 1).find("5 deg"), std::string::npos) << preview_status_line(o, 1);
+  o.method = "relief";
+  const Mesh quad = test::make_grid(1, 1);
+  const PreviewMaps maps = maps_with_height([](float u) { return 0.05f * u; });
+  HeadlessPreview gpu(quad, maps);
+  Image plain_fetches, lined_fetches;
+  const Image plain = gpu.render(o, &plain_fetches);
+  o.status_line = line;
+  const Image lined = gpu.render(o, &lined_fetches);
+  EXPECT_EQ(plain_fetches.pixels, lined_fetches.pixels);
+  size_t changed = 0, white = 0;
+  int lowest = -1;
+  for (int y = 0; y < plain.height; ++y)
+    for (int x = 0; x < plain.width; ++x) {
+      bool differs = false;
+      for (int c = 0; c < 4; ++c) differs |= plain.at(x, y, c) != lined.at(x, y, c);
+      if (!differs) continue;
+      ++changed;
+      lowest = std::max(lowest, y);
+      white += lined.at(x, y, 0) == 1.0f && lined.at(x, y, 1) == 1.0f && lined.at(x, y, 2) == 1.0f && lined.at(x, y, 3) == 1.0f;
+    }
+  std::printf("status line: %zu pixels changed (%zu white glyph pixels), rows 0-%d\n", changed, white, lowest);
+  EXPECT_GT(white, 100u);
+  EXPECT_GT(changed, 3 * white);
+  EXPECT_LT(lowest, 20) << "one line of text at the top";
+}
+
 TEST(Preview, EveryMethodIsStableStraightOnAndGrazing) {
   const Mesh cylinder = test::make_parametric(32, 8, [](double s, double t) {
     const double a = 1.2 * (s - 0.5);

@@ -832,6 +832,10 @@ void SurfaceRenderer::draw(const PreviewOptions& o, int width, int height) {
   }
   last_per_vertex_ = per_vertex;
   glBindVertexArray(0);
+  if (!o.status_line.empty()) {
+    if (!status_line_) status_line_ = std::make_unique<StatusLine>();
+    status_line_->draw(o.status_line, width, height);
+  }
 }
 
 }  // namespace meso

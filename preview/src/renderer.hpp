@@ -3,12 +3,14 @@
 #pragma once
 
 #include "camera.hpp"
+#include "status_line.hpp"
 #include "meso/bake/tangent_frame.hpp"
 #include "meso/preview/preview.hpp"
 
 #include <epoxy/gl.h>
 
 #include <array>
+#include <memory>
 #include <vector>
 
 namespace meso {
@@ -46,6 +48,7 @@ class SurfaceRenderer {
   int bind_dstream(const PreviewOptions& options, const CameraPose& pose);
 
   const Mesh& base_;
+  std::unique_ptr<StatusLine> status_line_;  // made on first use
   GLuint program_ = 0, vao_ = 0, vbo_ = 0, ibo_ = 0, height_tex_ = 0, normal_tex_ = 0, sdf_tex_ = 0;
   float sdf_scale_ = 0, sdf_bias_ = 0, sdf_relief_ = 0, sdf_aspect_ = 1, sdf_epsilon_ = 0, sdf_margin_ = 0;
   bool sdf_wrap_ = false;

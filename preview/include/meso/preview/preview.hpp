@@ -152,7 +152,14 @@ struct PreviewOptions {
   float tess_normal_angle = 5.0f;
   float tess_pixels = 2.0f;
   int tess_edge_samples = 8;
+  // A line of text drawn over the frame at its top left (white on a dark band; ASCII; the
+  // window's status line, see preview_status_line). Empty: none. The fetch counts do not see it.
+  std::string status_line;
 };
+
+// The window's on-screen line for `options`: the method, its budget and its own knobs, the
+// view angle, shadows and silhouettes, and the frame time `ms`.
+std::string preview_status_line(const PreviewOptions& options, double ms);
 
 // Method names this build renders: per vertex mesh, tessellation; per pixel in the order of
 // the survey; then vdm (per pixel, vdm.exr) and dstream (per vertex, dstream.bin).
