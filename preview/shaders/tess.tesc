@@ -1,7 +1,8 @@
 #version 450 core
 // Tessellation levels per base triangle for the per-vertex methods.
 //   mesh (u_tess_mode 0): brute force, one segment per texel along every edge (the
-//     displacement map's resolution; GL caps a level at 64 segments).
+//     displacement map's resolution). GL caps a level at 64 segments: where an edge spans
+//     more texels, renderer.cpp has already cut the base triangles into k x k patches.
 //   tessellation (u_tess_mode 1): adaptive edge tests (survey section 3): an edge is cut per
 //     texel where the displacement along it departs from linear (by u_tess_displacement of
 //     the height range), at least every u_tess_normal_angle of normal change, never into

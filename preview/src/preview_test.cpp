@@ -881,8 +881,8 @@ TEST(Measure, SearchMethodsAgreeWithTheReference) {
         EXPECT_LT(m.rmse, 0.01) << m.name;
         continue;
       }
-      // Per-vertex methods at about a texel per segment (the base quad's edges are 64 and 90
-      // texels long; GL allows 64 segments) and DIG-DM (not a safe method) miss a little. The
+      // Per-vertex methods at about a texel per segment (linear between the texel centres they
+      // sample, where the reference is bilinear) and DIG-DM (not a safe method) miss a little. The
       // safe methods trace the very surface the reference intersects (the bilinear one, exactly
       // on this flat quad): not one pixel may differ.
       const bool approximate = m.name == "mesh" || m.name == "tessellation" || m.name == "dig";
@@ -1122,6 +1122,55 @@ TEST(Measure, PerVertexFetchCounts) {
   double sum = 0;
   for (size_t i = 0; i < fetches.texel_count(); ++i) sum += fetches.pixels[2 * i];
   EXPECT_NEAR(sum, 2 * 3 + 2 * 3 * 9, 0.5) << "a flat map needs no vertex but the corners";
+}
+
+// The mesh method makes a segment per texel along every edge however long: GL cuts a patch
+// edge into at most 64 segments, so the renderer cuts the base triangles first. A quad with a
+// 256 x 256 map (edges of 256 texels, the diagonal 362): each triangle's interior needs at
+// least (256 + 1)(256 + 2) / 2 vertices, where 64 segments per edge would give (64 + 1)(64 + 2)
+// / 2. Every patch is drawn (llvmpipe drops a draw's patches beyond about 2^16 vertices): seen
+// straight on, the per-vertex methods cover the pixels the base triangles cover, but for the
+// mesh's border, which the heights make ragged in perspective.
+TEST(Measure, PerVertexMethodsDrawEveryPatchAndMeshASegmentPerTexel) {
+  PreviewMaps maps;
+  maps.displacement = Image(256, 256, 1);
+  for (int y = 0; y < 256; ++y)
+    for (int x = 0; x < 256; ++x)
+      maps.displacement.at(x, y) = 0.02f * std::sin(0.3f * static_cast<float>(x)) * std::cos(0.2f * static_cast<float>(y));
+  maps.normal_ts = Image(1, 1, 3);
+  maps.normal_ts.pixels = {0.5f, 0.5f, 1.0f};
+  for (const int cells : {1, 8}) {
+    const Mesh grid = test::make_grid(cells, cells);
+    HeadlessPreview gpu(grid, maps);
+    PreviewOptions o = view_options("bump", 0.0f, 0.0f, 64, PreviewShade::uv);
+    o.width = o.height = 160;
+    o.camera.zoom = 1.4f;
+    o.tess_displacement = 0.0f;  // tessellation: a segment per texel on every edge, as mesh
+    o.tess_pixels = 0.01f;
+    const Image flat = gpu.render(o);
+    for (const char* method : {"mesh", "tessellation"}) {
+      o.method = method;
+      Image fetches;
+      const Image img = gpu.render(o, &fetches);
+      double sum = 0;
+      for (size_t i = 0; i < fetches.texel_count(); ++i) sum += fetches.pixels[2 * i];
+      std::printf("%d x %d cells, %s: %.0f vertex fetches\n", cells, cells, method, sum);
+      if (cells == 1 && std::string(method) == "mesh") {
+        EXPECT_GE(sum, 2.0 * 257 * 258 / 2);
+        EXPECT_LE(sum, 2.0 * 256 * 256 * 3 * 2);
+      }
+      size_t missing = 0, inside = 0;
+      for (int y = 0; y < img.height; ++y)
+        for (int x = 0; x < img.width; ++x) {
+          const float u = flat.at(x, y, 0), v = flat.at(x, y, 1);
+          if (flat.at(x, y, 3) < 0.5f || u < 0.02f || u > 0.98f || v < 0.02f || v > 0.98f) continue;
+          ++inside;
+          missing += img.at(x, y, 3) < 0.5f;
+        }
+      EXPECT_GT(inside, img.texel_count() / 3);
+      EXPECT_EQ(missing, 0u) << cells << " x " << cells << " cells, " << method;
+    }
+  }
 }
 
 // The tessellated surface is watertight: seen straight on, every pixel inside the quad is

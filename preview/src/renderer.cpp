@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <cstdlib>
 #include <cstring>
 #include <initializer_list>
@@ -298,6 +299,98 @@ GLuint upload_texture(const Image& img, int channels) {
   return tex;
 }
 
+// The mesh method draws a segment per texel along every edge, but GL cuts a patch edge into
+// at most 64 segments. So where an edge spans more than 64 texels of the displacement map,
+// every base triangle is first cut uniformly into k x k, k = ceil(longest edge / 64) (capped
+// so that no more than 2^22 sub-triangles are made): every sub-edge then spans at most 64
+// texels, 64 k over the whole edge. Attributes are interpolated linearly, as tess.tese does
+// over a patch. Crack-free: a vertex on an edge is made once per pair of corners (both
+// triangles share it) and interpolated from the end that comes first by position (tess.tesc's
+// canonical order), so a seam's two copies of an edge get the same positions bitwise; the
+// tangent sign is the triangle's first corner's (the baker's convention).
+// `verts`: per-corner attributes of `stride` floats (position first, the tangent sign at
+// `sign_at`); `tris`: corner indices. Returns k (1: nothing made).
+int subdivide_for_mesh(const std::vector<float>& verts, const std::vector<uint32_t>& tris, size_t stride, size_t sign_at, int map_w,
+                       int map_h, std::vector<float>& out_verts, std::vector<uint32_t>& out_tris) {
+  const size_t nt = tris.size() / 3;
+  double longest = 0;
+  for (size_t t = 0; t < nt; ++t)
+    for (size_t e = 0; e < 3; ++e) {
+      const float* a = &verts[tris[3 * t + e] * stride];
+      const float* b = &verts[tris[3 * t + (e + 1) % 3] * stride];
+      longest = std::max(longest, std::hypot((static_cast<double>(b[6]) - a[6]) * map_w, (static_cast<double>(b[7]) - a[7]) * map_h));
+    }
+  int k = static_cast<int>(std::ceil(longest / 64.0 - 1e-9));
+  const double cap = nt ? std::sqrt(static_cast<double>(1u << 22) / static_cast<double>(nt)) : 1.0;
+  k = std::clamp(k, 1, std::max(1, static_cast<int>(cap)));
+  if (k == 1) return 1;
+  out_verts = verts;  // the corners keep their indices
+  out_tris.clear();
+  auto before = [&](uint32_t i, uint32_t j) {
+    const float *a = &verts[i * stride], *b = &verts[j * stride];
+    if (a[0] != b[0]) return a[0] < b[0];
+    if (a[1] != b[1]) return a[1] < b[1];
+    if (a[2] != b[2]) return a[2] < b[2];
+    return i < j;
+  };
+  auto add = [&](const float* values) {
+    out_verts.insert(out_verts.end(), values, values + stride);
+    return static_cast<uint32_t>(out_verts.size() / stride - 1);
+  };
+  // Vertex m (1..k-1) of the edge between corners i and j, counted from the first by position.
+  std::map<std::pair<uint32_t, uint32_t>, uint32_t> edge_first;
+  std::vector<float> value(stride);
+  auto edge_vertex = [&](uint32_t i, uint32_t j, int m, float sign) {
+    if (!before(i, j)) {
+      std::swap(i, j);
+      m = k - m;
+    }
+    auto [it, fresh] = edge_first.try_emplace({i, j}, 0u);
+    if (fresh) {
+      const float *a = &verts[i * stride], *b = &verts[j * stride];
+      for (int s = 1; s < k; ++s) {
+        const float t = static_cast<float>(s) / static_cast<float>(k);
+        for (size_t c = 0; c < stride; ++c) value[c] = a[c] + (b[c] - a[c]) * t;
+        value[sign_at] = sign;
+        const uint32_t id = add(value.data());
+        if (s == 1) it->second = id;
+      }
+    }
+    return it->second + static_cast<uint32_t>(m - 1);
+  };
+  std::vector<uint32_t> grid;
+  for (size_t t = 0; t < nt; ++t) {
+    const uint32_t A = tris[3 * t], B = tris[3 * t + 1], C = tris[3 * t + 2];
+    const float sign = verts[A * stride + sign_at];
+    // grid[(i, j)]: the point A + i/k (B - A) + j/k (C - A), i + j <= k.
+    grid.assign(static_cast<size_t>((k + 1) * (k + 1)), 0u);
+    auto at = [&](int i, int j) -> uint32_t& { return grid[static_cast<size_t>(j * (k + 1) + i)]; };
+    for (int j = 0; j <= k; ++j)
+      for (int i = 0; i + j <= k; ++i) {
+        if (i == 0 && j == 0) at(i, j) = A;
+        else if (i == k) at(i, j) = B;
+        else if (j == k) at(i, j) = C;
+        else if (j == 0) at(i, j) = edge_vertex(A, B, i, sign);
+        else if (i == 0) at(i, j) = edge_vertex(A, C, j, sign);
+        else if (i + j == k) at(i, j) = edge_vertex(B, C, j, sign);
+        else {
+          const float wb = static_cast<float>(i) / static_cast<float>(k), wc = static_cast<float>(j) / static_cast<float>(k);
+          const float wa = 1.0f - wb - wc;
+          for (size_t c = 0; c < stride; ++c) value[c] = wa * verts[A * stride + c] + wb * verts[B * stride + c] + wc * verts[C * stride + c];
+          value[sign_at] = sign;
+          at(i, j) = add(value.data());
+        }
+      }
+    // Corners and edge vertices keep their own attributes; the cut triangles keep ABC's turn.
+    for (int j = 0; j < k; ++j)
+      for (int i = 0; i + j < k; ++i) {
+        out_tris.insert(out_tris.end(), {at(i, j), at(i + 1, j), at(i, j + 1)});
+        if (i + j + 1 < k) out_tris.insert(out_tris.end(), {at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)});
+      }
+  }
+  return k;
+}
+
 }  // namespace
 
 SurfaceRenderer::SurfaceRenderer(const Mesh& base, const PreviewMaps& maps) : base_(base) {
@@ -360,6 +453,30 @@ SurfaceRenderer::SurfaceRenderer(const Mesh& base, const PreviewMaps& maps) : ba
   glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(split.triangles.size() * sizeof(uint32_t)),
                split.triangles.data(), GL_STATIC_DRAW);
   glBindVertexArray(0);
+  {
+    std::vector<float> cut_verts;
+    std::vector<uint32_t> cut_tris;
+    mesh_subdivision_ = subdivide_for_mesh(verts, split.triangles, kStride, 11, maps.displacement.width, maps.displacement.height, cut_verts, cut_tris);
+    if (mesh_subdivision_ > 1) {
+      glGenVertexArrays(1, &mesh_vao_);
+      glBindVertexArray(mesh_vao_);
+      glGenBuffers(1, &mesh_vbo_);
+      glBindBuffer(GL_ARRAY_BUFFER, mesh_vbo_);
+      glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(cut_verts.size() * sizeof(float)), cut_verts.data(), GL_STATIC_DRAW);
+      offset = 0;
+      for (GLuint a = 0; a < 7; ++a) {
+        glEnableVertexAttribArray(a);
+        glVertexAttribPointer(a, sizes[a], GL_FLOAT, GL_FALSE, static_cast<GLsizei>(kStride * sizeof(float)),
+                              reinterpret_cast<const void*>(offset * sizeof(float)));
+        offset += static_cast<size_t>(sizes[a]);
+      }
+      glGenBuffers(1, &mesh_ibo_);
+      glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, mesh_ibo_);
+      glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(cut_tris.size() * sizeof(uint32_t)), cut_tris.data(), GL_STATIC_DRAW);
+      mesh_index_count_ = static_cast<GLsizei>(cut_tris.size());
+      glBindVertexArray(0);
+    }
+  }
 
   height_tex_ = upload_texture(maps.displacement, 1);
   normal_tex_ = upload_texture(maps.normal_ts, 3);
@@ -677,6 +794,9 @@ SurfaceRenderer::~SurfaceRenderer() {
   glDeleteBuffers(1, &vbo_);
   glDeleteBuffers(1, &ibo_);
   glDeleteVertexArrays(1, &vao_);
+  glDeleteBuffers(1, &mesh_vbo_);
+  glDeleteBuffers(1, &mesh_ibo_);
+  glDeleteVertexArrays(1, &mesh_vao_);
   glDeleteProgram(program_);
 }
 
@@ -826,7 +946,16 @@ void SurfaceRenderer::draw(const PreviewOptions& o, int width, int height) {
     glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, sizeof zero, &zero);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, vertex_work_);
     glPatchParameteri(GL_PATCH_VERTICES, 3);
-    glDrawElements(GL_PATCHES, index_count_, GL_UNSIGNED_INT, nullptr);
+    // A few patches per draw call: Mesa's llvmpipe drops the output of a draw whose patches
+    // generate more than about 2^16 vertices (seen as missing patches; a patch at level 64
+    // makes about 3,100), so no draw here makes more than 16 patches' worth.
+    const bool cut = o.method == "mesh" && mesh_vao_;
+    if (cut) glBindVertexArray(mesh_vao_);
+    const GLsizei count = cut ? mesh_index_count_ : index_count_;
+    constexpr GLsizei kPatchesPerDraw = 16;
+    for (GLsizei first = 0; first < count; first += 3 * kPatchesPerDraw)
+      glDrawElements(GL_PATCHES, std::min<GLsizei>(3 * kPatchesPerDraw, count - first), GL_UNSIGNED_INT,
+                     reinterpret_cast<const void*>(static_cast<size_t>(first) * sizeof(uint32_t)));
   } else {
     glDrawElements(GL_TRIANGLES, index_count_, GL_UNSIGNED_INT, nullptr);
   }

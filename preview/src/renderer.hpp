@@ -83,7 +83,16 @@ class SurfaceRenderer {
   std::vector<int> dstream_segments_;
   float dstream_min_ = 0, dstream_max_ = 0;
   GLsizei index_count_ = 0;
+  // The mesh method's patches where an edge spans more texels than GL's 64 segments: every
+  // base triangle cut into k x k (see the constructor); 0 and k = 1 when none is needed.
+  GLuint mesh_vao_ = 0, mesh_vbo_ = 0, mesh_ibo_ = 0;
+  GLsizei mesh_index_count_ = 0;
+  int mesh_subdivision_ = 1;
   float h_min_ = 0, h_max_ = 0;
+
+ public:
+  // k of the mesh method's k x k cut of every base triangle (1: none).
+  int mesh_subdivision() const { return mesh_subdivision_; }
 };
 
 // The previewer's limits on vdm.exr (uniform arrays in vdm.glsl).
