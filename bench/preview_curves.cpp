@@ -77,7 +77,7 @@ struct Options {
   double reference_edge = 0.5;  // texels: the reference's longest sub-triangle edge
   bool triangulated_reference = false;  // tessellate the flat plane too (the reference before the exact cells)
   std::vector<std::string> maps = {"rocks", "bricks", "mountains"};
-  std::vector<double> views = {30, 60, 80};
+  std::vector<double> views = {30, 60, 80, 85, 89};
   std::vector<int> budgets = {1, 2, 4, 8, 16, 32, 64, 128, 256};
   std::vector<std::string> methods;  // empty: every per-pixel method preview_methods() lists
   bool check = true;                 // cross-check against compare_methods once
@@ -92,7 +92,7 @@ const char* kUsage =
     "  --pixels N           frame size N x N (default 256)\n"
     "  --tiles K            plane of K x K map tiles (default 4)\n"
     "  --relief R           height range in object units (map tile = 1 unit; default 0.05)\n"
-    "  --views A,B,...      view angles, degrees from the normal (default 30,60,80)\n"
+    "  --views A,B,...      view angles, degrees from the normal (default 30,60,80,85,89: grazing views included)\n"
     "  --azimuth B          degrees around the normal (default 20)\n"
     "  --zoom Z             camera zoom for every view (default: per view angle)\n"
     "  --budgets a,b,...    iteration budgets (default 1,2,4,...,256)\n"

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Reproduces the preview-method curves of docs/benchmarks.md: every per-pixel method of
 # `meso preview` over its iteration budgets on three height maps (rocks: uniform heights,
-# bricks: top heavy, mountains: bottom heavy), at three view angles, against the reference
+# bricks: top heavy, mountains: bottom heavy), at five view angles (30° to the grazing 85° and 89°), against the reference
 # renderer; a CSV, one SVG per map and view, and the two goals (DIG-DM against POM
 # at equal error; safe methods missing no first intersection).
 #   bench/preview_curves.sh [BUILD_DIR] [preview_curves options...]   (default build/release)
