@@ -23,6 +23,7 @@ struct Args {
   std::vector<float> pan;
   PreviewOptions options;
   bool headless = false, list = false, compare = false;
+  int frames = 0;
   int repetitions = 5;
   double uv_tolerance = 1.0, reference_edge = 0.5;
   size_t reference_triangles = size_t(1) << 25;
@@ -91,7 +92,11 @@ void add_preview(CLI::App& app, Context& ctx) {
       "method whose stream is in --streams)");
   sub->add_flag("--list-methods", args->list, "Print the method names, one per line, and exit");
   sub->add_flag("--headless", args->headless, "Render off screen (EGL, no display needed) to --png");
-  sub->add_option("--png", args->png, "Output image for --headless (RGBA PNG, 8 bit); with --compare, the reference image (in --shade)");
+  sub->add_option("--png", args->png,
+                  "Output image for --headless (RGBA PNG, 8 bit); with --compare, the reference image (in --shade); in the window "
+                  "with --frames, its last frame");
+  sub->add_option("--frames", args->frames, "Window: close after N frames (scripted runs; the report gives the median frame time)")
+      ->check(CLI::Range(1, 1000000));
   sub->add_option("--size", args->size, "Image size WxH");
   sub->add_option("--view-angle", args->options.camera.view_angle,
                   "Degrees between the view direction and the mesh's mean normal (0 to 89.9)")
@@ -204,6 +209,9 @@ void add_preview(CLI::App& app, Context& ctx) {
       o.shade = args->shade == "uv" ? PreviewShade::uv : args->shade == "height" ? PreviewShade::height : PreviewShade::lit;
       o.shadows = args->shadows == "hard" ? PreviewShadows::hard : args->shadows == "soft" ? PreviewShadows::soft : PreviewShadows::none;
       if (args->turntable > 0 && (!args->headless || args->compare)) throw UsageError("preview: --turntable needs --headless (and no --compare)");
+      if (args->frames > 0 && (args->headless || args->compare)) throw UsageError("preview: --frames is for the window (not --headless or --compare)");
+      if (!args->headless && !args->compare && !args->png.empty() && args->frames == 0)
+        throw UsageError("preview: --png needs --headless, --compare or (in the window) --frames N");
       nlohmann::json base_report;
       const Mesh base = load_mesh(ctx.globals, args->base, base_report);
       if (!has_uvs(base)) throw InputError(args->base, "has no texture coordinates; the maps cannot be applied");
@@ -240,8 +248,14 @@ void add_preview(CLI::App& app, Context& ctx) {
         return 0;
       }
       if (!args->headless) {
-        run_window(base, maps, o);
-        report = {{"command", "preview"}, {"method", o.method}};
+        const WindowRun run = run_window(base, maps, o, args->frames);
+        report = {{"command", "preview"}, {"method", o.method}, {"frames", run.frames}, {"median_frame_ms", run.median_ms}};
+        if (!args->png.empty() && !run.last_frame.empty()) {
+          OutputSet outputs;
+          write_image(run.last_frame, outputs.add(args->png), PixelFormat::uint8);
+          outputs.commit();
+          report["png"] = args->png;
+        }
         return 0;
       }
       if (args->turntable > 0) {

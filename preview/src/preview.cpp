@@ -222,7 +222,7 @@ struct WindowState {
 };
 }  // namespace
 
-void run_window(const Mesh& base, const PreviewMaps& maps, const PreviewOptions& initial) {
+WindowRun run_window(const Mesh& base, const PreviewMaps& maps, const PreviewOptions& initial, int frames) {
   check_maps(maps, initial.method);
   if (!glfwInit()) throw InternalError("no display for a preview window (use --headless --png FILE)");
   struct Terminate {
@@ -296,8 +296,16 @@ void run_window(const Mesh& base, const PreviewMaps& maps, const PreviewOptions&
     if (key == GLFW_KEY_DOWN) s->options.camera.light_elevation = std::max(s->options.camera.light_elevation - 5.0f, 0.0f);
     if (key == GLFW_KEY_ESCAPE || key == GLFW_KEY_Q) glfwSetWindowShouldClose(w, GLFW_TRUE);
   });
+  // The renderer's GL objects go before the window and its context (deleting them without a
+  // current context aborted in libepoxy when the window closed).
+  struct DestroyWindow {
+    GLFWwindow* w;
+    ~DestroyWindow() { glfwDestroyWindow(w); }
+  } destroy_window{window};
   SurfaceRenderer renderer(base, maps);
   double ms = 0;
+  WindowRun run;
+  std::vector<double> times;
   while (!glfwWindowShouldClose(window)) {
     const auto t0 = std::chrono::steady_clock::now();
     int w = 0, h = 0;
@@ -308,11 +316,28 @@ void run_window(const Mesh& base, const PreviewMaps& maps, const PreviewOptions&
     if (w > 0 && h > 0) renderer.draw(frame, w, h);
     glFinish();
     ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    times.push_back(ms);
+    ++run.frames;
+    if (frames > 0 && run.frames >= frames && w > 0 && h > 0) {
+      run.last_frame = Image(w, h, 4);
+      std::vector<float> rows(static_cast<size_t>(w) * static_cast<size_t>(h) * 4);
+      glReadBuffer(GL_BACK);
+      glPixelStorei(GL_PACK_ALIGNMENT, 1);
+      glReadPixels(0, 0, w, h, GL_RGBA, GL_FLOAT, rows.data());
+      const size_t row = static_cast<size_t>(w) * 4;
+      for (int y = 0; y < h; ++y)  // GL's rows start at the bottom
+        std::copy_n(rows.data() + static_cast<size_t>(h - 1 - y) * row, row, run.last_frame.pixels.data() + static_cast<size_t>(y) * row);
+    }
     glfwSetWindowTitle(window, ("meso preview | " + preview_status_line(state.options, ms)).c_str());
     glfwSwapBuffers(window);
-    glfwWaitEventsTimeout(0.1);
+    if (frames > 0 && run.frames >= frames) break;
+    glfwWaitEventsTimeout(frames > 0 ? 0.0 : 0.1);
   }
-  glfwDestroyWindow(window);
+  if (!times.empty()) {
+    std::nth_element(times.begin(), times.begin() + static_cast<std::ptrdiff_t>(times.size() / 2), times.end());
+    run.median_ms = times[times.size() / 2];
+  }
+  return run;
 }
 
 }  // namespace meso

@@ -344,8 +344,16 @@ Image fetch_heatmap(const Image& fetches, double max_fetches);
 // zooms, 1-9 and 0 choose among the first ten methods, Tab (Shift+Tab) goes to the next
 // (previous) method, +/- change the iteration budget, S cycles the shadows (none, hard,
 // soft), C toggles silhouettes, the arrow keys move the light; methods whose stream was not loaded are skipped; the
-// title line shows the method, its budget, the view angle, the shadows and the frame time.
+// on-screen line (and the title) shows the method, its budget and knobs, the view angle, the
+// shadows and the frame time. With `frames` > 0 it closes itself after that many frames and
+// returns the last one as drawn (RGBA float, top row first, read back before the swap; alpha
+// as the window's framebuffer has it), for scripted runs and tests.
 // Throws InternalError when no display is available.
-void run_window(const Mesh& base, const PreviewMaps& maps, const PreviewOptions& options);
+struct WindowRun {
+  int frames = 0;          // frames drawn
+  double median_ms = 0;    // draw time per frame (CPU clock around draw and glFinish)
+  Image last_frame;        // with frames > 0 only
+};
+WindowRun run_window(const Mesh& base, const PreviewMaps& maps, const PreviewOptions& options, int frames = 0);
 
 }  // namespace meso
