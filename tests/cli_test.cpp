@@ -600,48 +600,6 @@ TEST_F(Skeleton, WholePipeline) {
       << "--turntable without --headless";
   EXPECT_FALSE(fs::exists(d / "w_000.png"));
 
-  // The window draws what headless draws ("same shaders, same results"): under a virtual X
-  // server (Debian's xvfb, which setup-deps installs; GLX on the same Mesa llvmpipe), the
-  // window closes itself after 2 frames and writes its last one; it must match the headless
-  // render of the same view in every pixel below the on-screen line (the top 16 rows), to
-  // the 8-bit framebuffer's rounding.
-  if (std::system("command -v xvfb-run >/dev/null 2>&1") == 0) {
-    const std::string view = " --method relief --size 96x64 --view-angle 50 --azimuth 20";
-    const Result window = run_env("xvfb-run -a -s '-screen 0 320x240x24' ",
-                                  "preview " + (d / "reduced.obj").string() + " --maps " + (d / "maps").string() + view +
-                                      " --frames 2 --png " + (d / "window.png").string() + " --json");
-    ASSERT_EQ(window.code, 0) << window.err;
-    const auto report = nlohmann::json::parse(window.out);
-    EXPECT_EQ(report["frames"].get<int>(), 2);
-    EXPECT_GT(report["median_frame_ms"].get<double>(), 0.0);
-    ASSERT_EQ(run("preview " + (d / "reduced.obj").string() + " --maps " + (d / "maps").string() + view + " --headless --png " +
-                  (d / "headless.png").string())
-                  .code,
-              0);
-    const Image win = read_image(d / "window.png"), off = read_image(d / "headless.png");
-    ASSERT_EQ(win.width, off.width);
-    ASSERT_EQ(win.height, off.height);
-    size_t on_mesh = 0;
-    double worst = 0;
-    for (int y = 16; y < win.height; ++y)
-      for (int x = 0; x < win.width; ++x) {
-        on_mesh += off.at(x, y, 3) > 0.5f;
-        for (int c = 0; c < 3; ++c) worst = std::max(worst, static_cast<double>(std::abs(win.at(x, y, c) - off.at(x, y, c))));
-      }
-    std::printf("window against headless: largest difference %.4f (%zu pixels on the mesh)\n", worst, on_mesh);
-    EXPECT_GT(on_mesh, 96u * 48u / 10);
-    EXPECT_LE(worst, 1.5 / 255.0);
-    EXPECT_EQ(run("preview " + (d / "reduced.obj").string() + " --maps " + (d / "maps").string() + " --headless --png " +
-                  (d / "x.png").string() + " --frames 2")
-                  .code,
-              2)
-        << "--frames is for the window";
-  } else if (const char* required = std::getenv("MESO_REQUIRE_PEERS"); required && std::string(required) == "1") {
-    ADD_FAILURE() << "xvfb-run is missing (scripts/setup-deps installs xvfb): the window is untested";
-  } else {
-    std::printf("xvfb-run not found: the window test is left out\n");
-  }
-
   const Result traced = run("preview " + (d / "reduced.obj").string() + " --maps " + (d / "maps").string() + " --streams " +
                             d.path().string() + " --method sphere-tracing --headless --png " + (d / "traced.png").string() +
                             " --size 48x32");
@@ -1486,4 +1444,54 @@ TEST(CliBake, PercentReachResolvesAgainstTheHighDiagonal) {
 }
 
 }  // namespace
+// The window draws what headless draws ("same shaders, same results"): under a virtual X
+// server (Debian's xvfb, which setup-deps installs; GLX on the same Mesa llvmpipe), the
+// window closes itself after 2 frames and writes its last one; it must match the headless
+// render of the same view in every pixel below the on-screen line (the top 16 rows), to the
+// 8-bit framebuffer's rounding.
+TEST(CliPreview, WindowDrawsWhatHeadlessDraws) {
+  if (std::system("command -v xvfb-run >/dev/null 2>&1") != 0) {
+    if (const char* required = std::getenv("MESO_REQUIRE_PEERS"); required && std::string(required) == "1")
+      FAIL() << "xvfb-run is missing (scripts/setup-deps installs xvfb): the window is untested";
+    GTEST_SKIP() << "xvfb-run not found";
+  }
+  test::TempDir d;
+  write_mesh(test::make_grid(4, 4), d / "base.obj");
+  fs::create_directories(d / "maps");
+  Image height(64, 64, 1), normals(64, 64, 3);
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 64; ++x) {
+      height.at(x, y) = 0.03f * std::abs(std::sin(0.3f * static_cast<float>(x)) * std::cos(0.2f * static_cast<float>(y)));
+      const float nx = 0.3f * std::sin(0.2f * static_cast<float>(x)), ny = 0.2f * std::cos(0.3f * static_cast<float>(y));
+      normals.at(x, y, 0) = 0.5f * nx + 0.5f;
+      normals.at(x, y, 1) = 0.5f * ny + 0.5f;
+      normals.at(x, y, 2) = 0.5f * std::sqrt(1 - nx * nx - ny * ny) + 0.5f;
+    }
+  write_image(height, d / "maps" / "displacement.exr", PixelFormat::float32);
+  write_image(normals, d / "maps" / "normal_ts.png", PixelFormat::uint16);
+  const std::string scene = "preview " + (d / "base.obj").string() + " --maps " + (d / "maps").string() +
+                            " --method relief --size 96x64 --view-angle 50 --azimuth 20";
+  const Result window = run_env("xvfb-run -a -s '-screen 0 320x240x24' ", scene + " --frames 2 --png " + (d / "window.png").string() + " --json");
+  ASSERT_EQ(window.code, 0) << window.err;
+  const auto report = nlohmann::json::parse(window.out);
+  EXPECT_EQ(report["frames"].get<int>(), 2);
+  EXPECT_GT(report["median_frame_ms"].get<double>(), 0.0);
+  ASSERT_EQ(run(scene + " --headless --png " + (d / "headless.png").string()).code, 0);
+  const Image win = read_image(d / "window.png"), off = read_image(d / "headless.png");
+  ASSERT_EQ(win.width, off.width);
+  ASSERT_EQ(win.height, off.height);
+  size_t on_mesh = 0;
+  double worst = 0;
+  for (int y = 16; y < win.height; ++y)
+    for (int x = 0; x < win.width; ++x) {
+      on_mesh += off.at(x, y, 3) > 0.5f;
+      for (int c = 0; c < 3; ++c) worst = std::max(worst, static_cast<double>(std::abs(win.at(x, y, c) - off.at(x, y, c))));
+    }
+  std::printf("window against headless: largest difference %.4f (%zu pixels on the mesh)\n", worst, on_mesh);
+  EXPECT_GT(on_mesh, 96u * 48u / 10);
+  EXPECT_LE(worst, 1.5 / 255.0);
+  EXPECT_EQ(run(scene + " --headless --png " + (d / "x.png").string() + " --frames 2").code, 2) << "--frames is for the window";
+  EXPECT_EQ(run(scene + " --png " + (d / "y.png").string()).code, 2) << "--png in the window needs --frames";
+}
+
 }  // namespace meso
