@@ -113,6 +113,8 @@ bool same_topology(const Mesh& base, const Mesh& cage) {
   return true;
 }
 
+const char* normal_y_name(NormalY y) { return y == NormalY::down ? "down" : "up"; }
+
 const char* hit_rule_name(HitRule r) {
   switch (r) {
     case HitRule::nearest: return "nearest";
@@ -697,8 +699,15 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
                              {"max", r.max_displacement}};
   r.coverage.metadata = {{"quantity", std::string("coverage")},
                          {"values", std::string("1 = hit, 0.75 = ambiguous hit, 0.5 = miss (covered, nothing within reach), 0 = outside the charts")}};
+  // Green down (DirectX): y negated, nothing else; the frame is MikkTSpace's either way, so
+  // the flip is exact.
+  const bool y_down = o.normal_y == NormalY::down;
+  if (y_down)
+    for (size_t i = 0; i < r.normal_ts.texel_count(); ++i) r.normal_ts.pixels[3 * i + 1] = -r.normal_ts.pixels[3 * i + 1];
   r.normal_ts.metadata = {{"quantity", std::string("normal")},
-                          {"space", std::string("tangent (MikkTSpace, +y = +v)")}};
+                          {"space", std::string(y_down ? "tangent (MikkTSpace frame, +y = -v: green down, DirectX)"
+                                                       : "tangent (MikkTSpace frame, +y = +v: green up, OpenGL)")},
+                          {"normal_y", std::string(normal_y_name(o.normal_y))}};
   r.normal_os.metadata = {{"quantity", std::string("normal")}, {"space", std::string("object")}};
   return r;
 }

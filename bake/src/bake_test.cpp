@@ -327,6 +327,48 @@ TEST(Bake, BrickWallMatchesItsHeightFunction) {
   EXPECT_LT(err[err.size() * 95 / 100], 0.1f * w.amplitude);
 }
 
+// NormalY::down (DirectX, Unreal) is NormalY::up's map (OpenGL, glTF, Blender, Unity) with y
+// negated, texel for texel, after the dilation too; everything else is identical, and the
+// metadata says which.
+TEST(Bake, NormalYDownNegatesGreenTexelForTexel) {
+  BrickWallOptions w;
+  w.columns = 60;
+  w.rows = 30;
+  const Mesh high = make_brick_wall(w);
+  const Mesh low = make_brick_wall_base(w, 6, 3);
+  BakeOptions o;
+  o.width = 64;
+  o.height = 48;
+  o.dilate = 2;  // some texels stay unwritten: the flat (0, 0, 1) there
+  const BakeResult up = bake(low, high, o);
+  o.normal_y = NormalY::down;
+  const BakeResult down = bake(low, high, o);
+  ASSERT_GT(up.hits, 0u);
+  auto bits = [](const Image& a, const Image& b) {
+    return a.pixels.size() == b.pixels.size() && std::memcmp(a.pixels.data(), b.pixels.data(), a.pixels.size() * sizeof(float)) == 0;
+  };
+  ASSERT_EQ(up.normal_ts.pixels.size(), down.normal_ts.pixels.size());
+  bool tilted = false;
+  for (size_t i = 0; i < up.normal_ts.texel_count(); ++i) {
+    ASSERT_EQ(down.normal_ts.pixels[3 * i], up.normal_ts.pixels[3 * i]) << i;
+    ASSERT_EQ(down.normal_ts.pixels[3 * i + 1], -up.normal_ts.pixels[3 * i + 1]) << i;
+    ASSERT_EQ(down.normal_ts.pixels[3 * i + 2], up.normal_ts.pixels[3 * i + 2]) << i;
+    tilted |= std::abs(up.normal_ts.pixels[3 * i + 1]) > 0.1f;
+  }
+  EXPECT_TRUE(tilted) << "the bevels tilt normals along v";
+  EXPECT_TRUE(bits(up.displacement, down.displacement));
+  EXPECT_TRUE(bits(up.normal_os, down.normal_os));
+  EXPECT_TRUE(bits(up.coverage, down.coverage));
+  EXPECT_EQ(up.hits, down.hits);
+  EXPECT_EQ(up.misses, down.misses);
+  EXPECT_EQ(up.ambiguous, down.ambiguous);
+  EXPECT_EQ(up.rays, down.rays);
+  EXPECT_EQ(std::get<std::string>(up.normal_ts.metadata.at("normal_y")), "up");
+  EXPECT_EQ(std::get<std::string>(down.normal_ts.metadata.at("normal_y")), "down");
+  EXPECT_NE(std::get<std::string>(up.normal_ts.metadata.at("space")).find("+y = +v"), std::string::npos);
+  EXPECT_NE(std::get<std::string>(down.normal_ts.metadata.at("space")).find("+y = -v"), std::string::npos);
+}
+
 TEST(Bake, MissesAreCountedAndFilled) {
   const Mesh low = test::make_grid(2, 2);
   Mesh high = make_plane(0, 0, 0.5f);  // out of reach
