@@ -78,6 +78,12 @@ struct BakeOptions {
   // the dilation: exactly up's map with y negated), and nothing else. Recorded in its metadata
   // ("space", "normal_y").
   NormalY normal_y = NormalY::up;
+  // Cast the first queries of neighbouring texels together as Embree ray streams (its
+  // packet kernels), where the options allow it: one sample per texel, no match_by_name with
+  // several parts, a rule other than furthest, without ignore_backfaces. The same queries
+  // and hit rules as false (each texel's rays on their own, the reference the tests compare
+  // with), faster; Embree's packet kernels may round a hit in the last bits differently.
+  bool coherent = true;
 };
 
 // Whether `cage` can serve as a cage of `base`: same vertex count and the same vertices on
