@@ -139,6 +139,7 @@ void add_bake(CLI::App& app, Context& ctx) {
       o.samples = args->samples;
       o.match_by_name = args->match_by_name;
       o.basis = args->basis == "pn" ? BakeBasis::pn : BakeBasis::linear;
+      o.normal_y = args->normal_y == "down" ? NormalY::down : NormalY::up;
       Image detail;
       if (!args->detail.empty()) {
         detail = read_image(args->detail);
@@ -181,14 +182,6 @@ void add_bake(CLI::App& app, Context& ctx) {
       const auto start = std::chrono::steady_clock::now();
       BakeResult r = bake(low, high, o, progress);
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-      // --normal-y down: the DirectX convention, green = -v. The tangent-space normals are
-      // otherwise those of the bake (MikkTSpace, +y = +v), so flipping y is exact.
-      const bool y_down = args->normal_y == "down";
-      if (y_down)
-        for (size_t i = 0; i < r.normal_ts.texel_count(); ++i) r.normal_ts.pixels[3 * i + 1] = -r.normal_ts.pixels[3 * i + 1];
-      r.normal_ts.metadata["space"] = std::string(y_down ? "tangent (MikkTSpace frame, +y = -v: green down, DirectX)"
-                                                         : "tangent (MikkTSpace frame, +y = +v: green up, OpenGL)");
-      r.normal_ts.metadata["normal_y"] = args->normal_y;
       const PixelFormat png_format = args->png_bits == 8 ? PixelFormat::uint8 : PixelFormat::uint16;
       const std::filesystem::path dir(args->out_dir);
       OutputSet outputs;

@@ -113,6 +113,8 @@ bool same_topology(const Mesh& base, const Mesh& cage) {
   return true;
 }
 
+const char* normal_y_name(NormalY y) { return y == NormalY::down ? "down" : "up"; }
+
 const char* hit_rule_name(HitRule r) {
   switch (r) {
     case HitRule::nearest: return "nearest";
@@ -314,16 +316,34 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
   });
   // `rays` counts the Embree queries cast (each intersect, occluded and collect is one ray),
   // for the report's rays per second.
-  auto trace = [&](int face, const std::array<float, 3>& bary, std::vector<RayHit>& hits, SampleValue& value, uint64_t& rays) -> bool {
-    const TexelSample s{face, bary, true};
-    const Part& part = parts[static_cast<size_t>(face_part[static_cast<size_t>(face)])];
-    const RayScene& scene = *part.scene;
-    const std::vector<Vec3f>& high_normals = part.normals;
-    const FaceCorners& fc = corners[static_cast<size_t>(s.face)];
+  //
+  // A sample's rays in three steps: setup() (the base point, its frame and the ray's
+  // direction), gather() each way (the queries), shade() (the choice among the hits and the
+  // values). trace() runs them in turn for one sample; the row loop's coherent path runs
+  // each step over a run of texels, casting their first queries together as ray streams
+  // (Embree's packets), and hands gather() those answers through `Answers`.
+  struct SampleRay {
+    const Part* part = nullptr;
+    Eigen::Vector3d p, n, t, base_normal, dir;
+    double sign = 1;  // the frame's handedness
+    Vec3f d;
+    float front_reach = 0;
+  };
+  // Queries already cast for a gather(): the outward collect() (with probe = inf, the
+  // first query of gather(+1)) or the inward any-hit probe (the first of gather(-1) when
+  // probe < tfar). Null: gather() casts its own.
+  struct Answers {
+    const RayScene::Candidates* collected = nullptr;  // with collect()'s return value:
+    bool collect_ok = false;
+    bool has_occluded = false, occluded = false;
+  };
+  auto setup = [&](int face, const std::array<float, 3>& bary, SampleRay& sr) -> bool {
+    sr.part = &parts[static_cast<size_t>(face_part[static_cast<size_t>(face)])];
+    const FaceCorners& fc = corners[static_cast<size_t>(face)];
     // Interpolated position, normal and MikkTSpace frame (unnormalised, as the shader).
     Eigen::Vector3d p = Eigen::Vector3d::Zero(), n = Eigen::Vector3d::Zero(), t = Eigen::Vector3d::Zero();
     for (size_t k = 0; k < 3; ++k) {
-      const double w = s.bary[k];
+      const double w = bary[k];
       p += w * fc.p[k];
       n += w * fc.n[k];
       t += w * fc.t[k];
@@ -331,126 +351,151 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
     if (o.basis == BakeBasis::pn) {
       // The curved PN patch instead of the flat triangle: position and normal.
       const std::array<Eigen::Vector3d, 3> cp{fc.p[0], fc.p[1], fc.p[2]}, cn{fc.n[0], fc.n[1], fc.n[2]};
-      pn_triangle(cp, cn, {s.bary[0], s.bary[1], s.bary[2]}, p, n);
+      pn_triangle(cp, cn, {bary[0], bary[1], bary[2]}, p, n);
     }
-    const double sign = fc.sign;
-    const Eigen::Vector3d b = sign * n.cross(t);
     if (!(n.norm() > 1e-12)) return false;  // opposite normals cancel: no direction to cast along
-    const Eigen::Vector3d base_normal = n.normalized();  // what "front-facing" is measured against
-    Eigen::Vector3d dir = base_normal;
-    float front_reach = r.front;
+    sr.p = p;
+    sr.sign = fc.sign;
+    sr.n = n;
+    sr.t = t;
+    sr.base_normal = n.normalized();  // what "front-facing" is measured against
+    sr.dir = sr.base_normal;
+    sr.front_reach = r.front;
     if (o.cage) {
       // Toward the cage's point, and no further.
       Eigen::Vector3d c = Eigen::Vector3d::Zero();
-      for (size_t k = 0; k < 3; ++k) c += s.bary[k] * fc.c[k];
+      for (size_t k = 0; k < 3; ++k) c += bary[k] * fc.c[k];
       const Eigen::Vector3d to_cage = c - p;
       if (to_cage.norm() > eps) {
-        dir = to_cage.normalized();
-        front_reach = static_cast<float>(to_cage.norm());
+        sr.dir = to_cage.normalized();
+        sr.front_reach = static_cast<float>(to_cage.norm());
       }
     }
-    const Vec3f d(static_cast<float>(dir.x()), static_cast<float>(dir.y()), static_cast<float>(dir.z()));
-    // Both ways from the base surface; the hit nearer to it wins (outward on a tie).
-    // Each ray starts `eps` behind the base point so that a high surface lying exactly
-    // on the base (high = low) is found by both, at distance 0.
-    auto start_at = [&](double offset) {
-      const Eigen::Vector3d q = p + offset * dir;
-      return Vec3f(static_cast<float>(q.x()), static_cast<float>(q.y()), static_cast<float>(q.z()));
-    };
-    // The hits along one direction (sign +1 outward, -1 inward). Only what the rule can
-    // use is traced: the nearest rules stop after the first hit's bunch (continuations
-    // reach only `bunch` further, cheap rays); the others go on through the reach.
-    const bool all_hits = o.hit == HitRule::furthest;
-    // A hit at ray distance t of a ray that started eps behind the base point, going `way`.
-    auto make_hit = [&](int way, float distance, uint32_t prim, float u, float v) {
-      RayHit rh;
-      rh.d = static_cast<float>(way) * (distance - eps);
-      rh.front = scene.face_normal(prim).dot(base_normal) > 0;
-      rh.prim = prim;
-      rh.u = u;
-      rh.v = v;
-      return rh;
-    };
-    // The common case in one traversal: the loop below casts for the nearest hit, then asks
-    // whether anything lies within `bunch` behind it (usually nothing). collect() reports
-    // every triangle the ray crosses up to a little past the nearest one's bunch, with the
-    // values intersect() would give; when the nearest is unique and the rule stops at it
-    // and nothing lies behind it (with a margin), the loop's answer is known: that one hit.
-    // Anything else (a tie, more hits to follow, no filter support) runs the loop.
-    //
-    // `probe` < tfar: hits beyond `probe` cannot change the texel's value (see below), so
-    // a ray to `probe` that finds nothing settles it (with or without filter support); if it
-    // finds something, the whole ray.
-    auto collect_first = [&](const Vec3f& org, const Vec3f& dir_s, int way, float tfar, float probe) -> bool {
-      if (all_hits || o.ignore_backfaces) return false;
-      // Nothing within `probe` (the usual answer): an any-hit query settles it for less than
-      // a closest-hit one, which must order its descent by distance.
-      if (probe < tfar) {
-        ++rays;
-        if (!scene.occluded(org, dir_s, 0.0f, probe)) return true;
-      }
-      RayScene::Candidates c;
-      const float window = 2.0f * r.bunch + 1e-6f * (tfar + eps);
-      rays += scene.filters();
-      if (!scene.collect(org, dir_s, 0.0f, tfar, window, c)) return false;
-      if (c.n == 0) return true;  // intersect() misses
-      int first = 0;
-      for (int j = 1; j < c.n; ++j)
-        if (c.hit[j].t < c.hit[first].t) first = j;
-      const RayScene::Candidate& h = c.hit[first];
+    sr.d = Vec3f(static_cast<float>(sr.dir.x()), static_cast<float>(sr.dir.y()), static_cast<float>(sr.dir.z()));
+    return true;
+  };
+  // Both ways from the base surface; the hit nearer to it wins (outward on a tie).
+  // Each ray starts `eps` behind the base point so that a high surface lying exactly
+  // on the base (high = low) is found by both, at distance 0.
+  auto start_at = [&](const SampleRay& sr, double offset) {
+    const Eigen::Vector3d q = sr.p + offset * sr.dir;
+    return Vec3f(static_cast<float>(q.x()), static_cast<float>(q.y()), static_cast<float>(q.z()));
+  };
+  // The hits along one direction (sign +1 outward, -1 inward). Only what the rule can
+  // use is traced: the nearest rules stop after the first hit's bunch (continuations
+  // reach only `bunch` further, cheap rays); the others go on through the reach.
+  const bool all_hits = o.hit == HitRule::furthest;
+  // A hit at ray distance t of a ray that started eps behind the base point, going `way`.
+  auto make_hit = [&](const SampleRay& sr, int way, float distance, uint32_t prim, float u, float v) {
+    RayHit rh;
+    rh.d = static_cast<float>(way) * (distance - eps);
+    rh.front = sr.part->scene->face_normal(prim).dot(sr.base_normal) > 0;
+    rh.prim = prim;
+    rh.u = u;
+    rh.v = v;
+    return rh;
+  };
+  // The window past the nearest candidate that collect() reports (see collect_first).
+  auto collect_window = [&](float tfar) { return 2.0f * r.bunch + 1e-6f * (tfar + eps); };
+  // The common case in one traversal: the loop below casts for the nearest hit, then asks
+  // whether anything lies within `bunch` behind it (usually nothing). collect() reports
+  // every triangle the ray crosses up to a little past the nearest one's bunch, with the
+  // values intersect() would give; when the nearest is unique and the rule stops at it
+  // and nothing lies behind it (with a margin), the loop's answer is known: that one hit.
+  // Anything else (a tie, more hits to follow, no filter support) runs the loop.
+  //
+  // `probe` < tfar: hits beyond `probe` cannot change the texel's value (see below), so
+  // a ray to `probe` that finds nothing settles it (with or without filter support); if it
+  // finds something, the whole ray.
+  auto collect_first = [&](const SampleRay& sr, const Vec3f& org, const Vec3f& dir_s, int way, float tfar, float probe,
+                           std::vector<RayHit>& hits, uint64_t& rays, const Answers* given) -> bool {
+    if (all_hits || o.ignore_backfaces) return false;
+    const RayScene& scene = *sr.part->scene;
+    // Nothing within `probe` (the usual answer): an any-hit query settles it for less than
+    // a closest-hit one, which must order its descent by distance.
+    if (probe < tfar) {
+      ++rays;
+      if (!(given && given->has_occluded ? given->occluded : scene.occluded(org, dir_s, 0.0f, probe))) return true;
+    }
+    RayScene::Candidates own;
+    const RayScene::Candidates* cands = &own;
+    rays += scene.filters();
+    if (given && given->collected) {
+      if (!given->collect_ok) return false;
+      cands = given->collected;
+    } else if (!scene.collect(org, dir_s, 0.0f, tfar, collect_window(tfar), own)) {
+      return false;
+    }
+    const RayScene::Candidates& c = *cands;
+    if (c.n == 0) return true;  // intersect() misses
+    int first = 0;
+    for (int j = 1; j < c.n; ++j)
+      if (c.hit[j].t < c.hit[first].t) first = j;
+    const RayScene::Candidate& h = c.hit[first];
+    for (int j = 0; j < c.n; ++j)
+      if (c.hit[j].t == h.t && c.hit[j].prim != h.prim) return false;  // a tie: Embree's pick
+    const RayHit rh = make_hit(sr, way, h.t, h.prim, h.u, h.v);
+    if (!(o.hit == HitRule::nearest || rh.front)) return false;  // the loop goes on
+    const float tnear = std::nextafter(h.t, tfar) + 1e-7f * (h.t + eps);
+    const float tstop = std::min(tfar, h.t + r.bunch);
+    if (tnear < tstop) {
+      // The loop's any-hit query over [tnear, tstop]: must find nothing, with a margin.
+      const float lo = h.t + 0.5f * (tnear - h.t), hi = tstop + 1e-6f * (tstop + eps) + 0.5f * r.bunch;
       for (int j = 0; j < c.n; ++j)
-        if (c.hit[j].t == h.t && c.hit[j].prim != h.prim) return false;  // a tie: Embree's pick
-      const RayHit rh = make_hit(way, h.t, h.prim, h.u, h.v);
-      if (!(o.hit == HitRule::nearest || rh.front)) return false;  // the loop goes on
-      const float tnear = std::nextafter(h.t, tfar) + 1e-7f * (h.t + eps);
-      const float tstop = std::min(tfar, h.t + r.bunch);
-      if (tnear < tstop) {
-        // The loop's any-hit query over [tnear, tstop]: must find nothing, with a margin.
-        const float lo = h.t + 0.5f * (tnear - h.t), hi = tstop + 1e-6f * (tstop + eps) + 0.5f * r.bunch;
-        for (int j = 0; j < c.n; ++j)
-          if (c.hit[j].prim != h.prim && c.hit[j].t >= lo && c.hit[j].t <= hi) return false;
+        if (c.hit[j].prim != h.prim && c.hit[j].t >= lo && c.hit[j].t <= hi) return false;
+    }
+    hits.push_back(rh);
+    return true;
+  };
+  auto gather = [&](const SampleRay& sr, int way, float limit, float probe, std::vector<RayHit>& hits, uint64_t& rays,
+                    const Answers* given) {
+    const RayScene& scene = *sr.part->scene;
+    const Vec3f org = start_at(sr, -way * eps);
+    const Vec3f dir_s = way > 0 ? sr.d : -sr.d;
+    if (collect_first(sr, org, dir_s, way, limit + eps, probe, hits, rays, given)) return;
+    float tnear = 0.0f, tfar = limit + eps;
+    bool found_front = false;
+    for (int k = 0; k < 16; ++k) {
+      const auto h = scene.intersect(org, dir_s, tnear, tfar);
+      ++rays;
+      if (!h.valid()) break;
+      const RayHit rh = make_hit(sr, way, h.t, h.prim, h.u, h.v);
+      // Past the hit (by a relative step that float coordinates resolve).
+      tnear = std::nextafter(h.t, tfar) + 1e-7f * (h.t + eps);
+      if (!(o.ignore_backfaces && !rh.front)) {
+        hits.push_back(rh);
+        found_front |= rh.front;
+        const bool done = !all_hits && (o.hit == HitRule::nearest || found_front);
+        if (done) tfar = std::min(tfar, h.t + r.bunch);  // only the bunch remains of interest
+        // Usually nothing is that close behind: an any-hit query says so for less.
+        rays += done && tnear < tfar;  // the occluded() query below
+        if (done && (tnear >= tfar || !scene.occluded(org, dir_s, tnear, tfar))) break;
       }
-      hits.push_back(rh);
-      return true;
-    };
-    auto gather = [&](int way, float limit, float probe) {
-      const Vec3f org = start_at(-way * eps);
-      const Vec3f dir_s = way > 0 ? d : -d;
-      if (collect_first(org, dir_s, way, limit + eps, probe)) return;
-      float tnear = 0.0f, tfar = limit + eps;
-      bool found_front = false;
-      for (int k = 0; k < 16; ++k) {
-        const auto h = scene.intersect(org, dir_s, tnear, tfar);
-        ++rays;
-        if (!h.valid()) break;
-        const RayHit rh = make_hit(way, h.t, h.prim, h.u, h.v);
-        // Past the hit (by a relative step that float coordinates resolve).
-        tnear = std::nextafter(h.t, tfar) + 1e-7f * (h.t + eps);
-        if (!(o.ignore_backfaces && !rh.front)) {
-          hits.push_back(rh);
-          found_front |= rh.front;
-          const bool done = !all_hits && (o.hit == HitRule::nearest || found_front);
-          if (done) tfar = std::min(tfar, h.t + r.bunch);  // only the bunch remains of interest
-          // Usually nothing is that close behind: an any-hit query says so for less.
-          rays += done && tnear < tfar;  // the occluded() query below
-          if (done && (tnear >= tfar || !scene.occluded(org, dir_s, tnear, tfar))) break;
-        }
-        if (tnear >= tfar) break;
-      }
-    };
-    hits.clear();
-    const float no_probe = std::numeric_limits<float>::infinity();
-    gather(+1, front_reach, no_probe);
-    // When the outward ray found exactly one hit, at |d| = A, and the rule stops at it (a
-    // nearest rule; front-facing unless the rule is nearest), an inward hit further than
-    // A + bunch from the base can be neither the choice (it is further), nor an ambiguous
-    // second (its score is more than `bunch` worse), nor in the choice's bunch (the gap to
-    // it exceeds `bunch`): the inward ray need only reach A + bunch, with a margin, unless
-    // it finds something there (then it goes the whole way, as before).
+      if (tnear >= tfar) break;
+    }
+  };
+  const float no_probe = std::numeric_limits<float>::infinity();
+  // When the outward ray found exactly one hit, at |d| = A, and the rule stops at it (a
+  // nearest rule; front-facing unless the rule is nearest), an inward hit further than
+  // A + bunch from the base can be neither the choice (it is further), nor an ambiguous
+  // second (its score is more than `bunch` worse), nor in the choice's bunch (the gap to
+  // it exceeds `bunch`): the inward ray need only reach A + bunch, with a margin, unless
+  // it finds something there (then it goes the whole way, as before).
+  auto inward_probe = [&](const std::vector<RayHit>& hits) {
     float probe = no_probe;
     if (hits.size() == 1 && !all_hits && !o.ignore_backfaces && (o.hit == HitRule::nearest || hits[0].front))
       probe = std::abs(hits[0].d) + eps + 2.0f * r.bunch + 1e-6f * (r.back + eps);
-    gather(-1, r.back, probe);
+    return probe;
+  };
+  // The value from a sample's hits (both ways); false when the rule accepts none.
+  auto shade = [&](const SampleRay& sr, std::vector<RayHit>& hits, SampleValue& value) -> bool {
+    const Part& part = *sr.part;
+    const RayScene& scene = *part.scene;
+    const std::vector<Vec3f>& high_normals = part.normals;
+    const Eigen::Vector3d& n = sr.n;
+    const Eigen::Vector3d& t = sr.t;
+    const Eigen::Vector3d b = sr.sign * n.cross(t);
+    const Eigen::Vector3d& dir = sr.dir;
     // By d. One or two hits are the rule: std::sort's insertion sort on two swaps them when
     // the second is less, exactly as here.
     if (hits.size() == 2) {
@@ -533,6 +578,14 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
     value.ambiguous = unsure;
     return true;
   };
+  auto trace = [&](int face, const std::array<float, 3>& bary, std::vector<RayHit>& hits, SampleValue& value, uint64_t& rays) -> bool {
+    SampleRay sr;
+    if (!setup(face, bary, sr)) return false;
+    hits.clear();
+    gather(sr, +1, sr.front_reach, no_probe, hits, rays, nullptr);
+    gather(sr, -1, r.back, inward_probe(hits), hits, rays, nullptr);
+    return shade(sr, hits, value);
+  };
 
   // Supersampling: n x n stratified samples per texel at the centres of its n x n sub-texels,
   // located by rasterising the UV layout at n times the resolution (a band of rows at a
@@ -550,10 +603,104 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
 
   building.wait();
   std::vector<uint64_t> row_rays(static_cast<size_t>(o.height), 0);  // summed in row order below
+  // The coherent path (one sample per texel, one scene, a rule whose first queries are known
+  // in advance): the texels of a run of up to kMaxStream in a row (fixed positions: the
+  // same runs whatever the thread count) are set up, their outward collect() queries cast as
+  // one ray stream, each texel's outward answer settled (with single rays where the stream's
+  // answer does not settle it), their inward probes cast as one stream, then each texel
+  // finished on its own (single rays where a probe finds something) and shaded. The same
+  // queries as trace() casts, in another order.
+  const bool coherent = o.coherent && !fine && parts.size() == 1 && parts[0].scene->filters() && parts[0].scene->streams() && !all_hits && !o.ignore_backfaces;
+  constexpr unsigned kRun = RayScene::kMaxStream;
+  // Texel (x, y) = i gets the mean of `count` samples.
+  auto write_texel = [&](int x, int y, size_t i, const SampleValue& sum, int count, bool unsure) {
+    // The box filter: mean displacement, mean normal renormalised.
+    const Eigen::Vector3d ts = sum.ts.squaredNorm() > 0 ? Eigen::Vector3d(sum.ts.normalized()) : Eigen::Vector3d(0, 0, 1);
+    const Eigen::Vector3d os = sum.os.squaredNorm() > 0 ? Eigen::Vector3d(sum.os.normalized()) : Eigen::Vector3d(0, 0, 1);
+    r.displacement.at(x, y) = static_cast<float>(sum.disp / count);
+    for (int c = 0; c < 3; ++c) {
+      r.normal_ts.at(x, y, c) = static_cast<float>(ts[c]);
+      r.normal_os.at(x, y, c) = static_cast<float>(os[c]);
+    }
+    ambiguous[i] = unsure;
+    written[i] = 1;
+  };
   tbb::parallel_for(tbb::blocked_range<int>(0, o.height), [&](const tbb::blocked_range<int>& rows) {
     std::vector<RayHit> hits;
+    // The coherent path's run: per texel its rays, hits, answers and index.
+    struct Lane {
+      int x = 0;
+      SampleRay sr;
+      std::vector<RayHit> hits;
+      Answers given;
+      float probe = 0;
+    };
+    std::vector<Lane> lanes(coherent ? kRun : 0);
+    std::vector<RayScene::Candidates> candidates(coherent ? kRun : 0);
+    std::vector<RTCRayHit> outward(coherent ? kRun : 0);
+    std::vector<RTCRay> inward(coherent ? kRun : 0);
+    std::array<float, kRun> windows{};
+    std::array<bool, kRun> occluded{};
+    std::array<unsigned, kRun> inward_lane{};
     for (int y = rows.begin(); y < rows.end(); ++y) {
       uint64_t rays = 0;  // local: rows of other threads share the vector's cache lines
+      if (coherent) {
+        const RayScene& scene = *parts[0].scene;
+        for (int x0 = 0; x0 < o.width; x0 += static_cast<int>(kRun)) {
+          const int x1 = std::min(o.width, x0 + static_cast<int>(kRun));
+          unsigned m = 0;
+          for (int x = x0; x < x1; ++x) {
+            const size_t i = static_cast<size_t>(y) * static_cast<size_t>(o.width) + static_cast<size_t>(x);
+            const TexelSample& s = samples[i];
+            if (s.face < 0) continue;
+            covered[i] = 1;
+            Lane& lane = lanes[m];
+            lane.x = x;
+            if (!setup(s.face, s.bary, lane.sr)) continue;
+            // gather(+1)'s first query: collect() from eps behind the base point.
+            const float tfar = lane.sr.front_reach + eps;
+            outward[m] = RayScene::ray_hit(start_at(lane.sr, -eps), lane.sr.d, 0.0f, tfar);
+            outward[m].ray.id = m;
+            windows[m] = collect_window(tfar);
+            ++m;
+          }
+          if (m == 0) continue;
+          scene.collect_coherent(outward.data(), m, windows.data(), candidates.data());
+          unsigned k = 0;
+          for (unsigned j = 0; j < m; ++j) {
+            Lane& lane = lanes[j];
+            lane.hits.clear();
+            Answers given;
+            given.collected = &candidates[j];
+            given.collect_ok = !candidates[j].overflow;
+            gather(lane.sr, +1, lane.sr.front_reach, no_probe, lane.hits, rays, &given);
+            lane.probe = inward_probe(lane.hits);
+            lane.given = Answers{};
+            if (lane.probe < r.back + eps) {
+              // gather(-1)'s first query: the any-hit probe from eps in front of the base point.
+              inward[k] = RayScene::ray_hit(start_at(lane.sr, eps), -lane.sr.d, 0.0f, lane.probe).ray;
+              inward[k].id = j;
+              inward_lane[k++] = j;
+            }
+          }
+          if (k > 0) scene.occluded_coherent(inward.data(), k, occluded.data());
+          for (unsigned q = 0; q < k; ++q) {
+            Answers& given = lanes[inward_lane[q]].given;
+            given.has_occluded = true;
+            given.occluded = occluded[q];
+          }
+          for (unsigned j = 0; j < m; ++j) {
+            Lane& lane = lanes[j];
+            gather(lane.sr, -1, r.back, lane.probe, lane.hits, rays, &lane.given);
+            SampleValue one;
+            if (!shade(lane.sr, lane.hits, one)) continue;
+            write_texel(lane.x, y, static_cast<size_t>(y) * static_cast<size_t>(o.width) + static_cast<size_t>(lane.x), one, 1, one.ambiguous);
+          }
+        }
+        row_rays[static_cast<size_t>(y)] = rays;
+        progress.advance(1);
+        continue;
+      }
       std::vector<TexelSample> band;
       if (fine) band = fine->rows(y * sub, (y + 1) * sub);
       for (int x = 0; x < o.width; ++x) {
@@ -582,16 +729,7 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
           unsure = one.ambiguous;
           count = 1;
         }
-        // The box filter: mean displacement, mean normal renormalised.
-        const Eigen::Vector3d ts = sum.ts.squaredNorm() > 0 ? Eigen::Vector3d(sum.ts.normalized()) : Eigen::Vector3d(0, 0, 1);
-        const Eigen::Vector3d os = sum.os.squaredNorm() > 0 ? Eigen::Vector3d(sum.os.normalized()) : Eigen::Vector3d(0, 0, 1);
-        r.displacement.at(x, y) = static_cast<float>(sum.disp / count);
-        for (int c = 0; c < 3; ++c) {
-          r.normal_ts.at(x, y, c) = static_cast<float>(ts[c]);
-          r.normal_os.at(x, y, c) = static_cast<float>(os[c]);
-        }
-        ambiguous[i] = unsure;
-        written[i] = 1;
+        write_texel(x, y, i, sum, count, unsure);
       }
       row_rays[static_cast<size_t>(y)] = rays;
       progress.advance(1);
@@ -697,8 +835,15 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
                              {"max", r.max_displacement}};
   r.coverage.metadata = {{"quantity", std::string("coverage")},
                          {"values", std::string("1 = hit, 0.75 = ambiguous hit, 0.5 = miss (covered, nothing within reach), 0 = outside the charts")}};
+  // Green down (DirectX): y negated, nothing else; the frame is MikkTSpace's either way, so
+  // the flip is exact.
+  const bool y_down = o.normal_y == NormalY::down;
+  if (y_down)
+    for (size_t i = 0; i < r.normal_ts.texel_count(); ++i) r.normal_ts.pixels[3 * i + 1] = -r.normal_ts.pixels[3 * i + 1];
   r.normal_ts.metadata = {{"quantity", std::string("normal")},
-                          {"space", std::string("tangent (MikkTSpace, +y = +v)")}};
+                          {"space", std::string(y_down ? "tangent (MikkTSpace frame, +y = -v: green down, DirectX)"
+                                                       : "tangent (MikkTSpace frame, +y = +v: green up, OpenGL)")},
+                          {"normal_y", std::string(normal_y_name(o.normal_y))}};
   r.normal_os.metadata = {{"quantity", std::string("normal")}, {"space", std::string("object")}};
   return r;
 }

@@ -327,6 +327,48 @@ TEST(Bake, BrickWallMatchesItsHeightFunction) {
   EXPECT_LT(err[err.size() * 95 / 100], 0.1f * w.amplitude);
 }
 
+// NormalY::down (DirectX, Unreal) is NormalY::up's map (OpenGL, glTF, Blender, Unity) with y
+// negated, texel for texel, after the dilation too; everything else is identical, and the
+// metadata says which.
+TEST(Bake, NormalYDownNegatesGreenTexelForTexel) {
+  BrickWallOptions w;
+  w.columns = 60;
+  w.rows = 30;
+  const Mesh high = make_brick_wall(w);
+  const Mesh low = make_brick_wall_base(w, 6, 3);
+  BakeOptions o;
+  o.width = 64;
+  o.height = 48;
+  o.dilate = 2;  // some texels stay unwritten: the flat (0, 0, 1) there
+  const BakeResult up = bake(low, high, o);
+  o.normal_y = NormalY::down;
+  const BakeResult down = bake(low, high, o);
+  ASSERT_GT(up.hits, 0u);
+  auto bits = [](const Image& a, const Image& b) {
+    return a.pixels.size() == b.pixels.size() && std::memcmp(a.pixels.data(), b.pixels.data(), a.pixels.size() * sizeof(float)) == 0;
+  };
+  ASSERT_EQ(up.normal_ts.pixels.size(), down.normal_ts.pixels.size());
+  bool tilted = false;
+  for (size_t i = 0; i < up.normal_ts.texel_count(); ++i) {
+    ASSERT_EQ(down.normal_ts.pixels[3 * i], up.normal_ts.pixels[3 * i]) << i;
+    ASSERT_EQ(down.normal_ts.pixels[3 * i + 1], -up.normal_ts.pixels[3 * i + 1]) << i;
+    ASSERT_EQ(down.normal_ts.pixels[3 * i + 2], up.normal_ts.pixels[3 * i + 2]) << i;
+    tilted |= std::abs(up.normal_ts.pixels[3 * i + 1]) > 0.1f;
+  }
+  EXPECT_TRUE(tilted) << "the bevels tilt normals along v";
+  EXPECT_TRUE(bits(up.displacement, down.displacement));
+  EXPECT_TRUE(bits(up.normal_os, down.normal_os));
+  EXPECT_TRUE(bits(up.coverage, down.coverage));
+  EXPECT_EQ(up.hits, down.hits);
+  EXPECT_EQ(up.misses, down.misses);
+  EXPECT_EQ(up.ambiguous, down.ambiguous);
+  EXPECT_EQ(up.rays, down.rays);
+  EXPECT_EQ(std::get<std::string>(up.normal_ts.metadata.at("normal_y")), "up");
+  EXPECT_EQ(std::get<std::string>(down.normal_ts.metadata.at("normal_y")), "down");
+  EXPECT_NE(std::get<std::string>(up.normal_ts.metadata.at("space")).find("+y = +v"), std::string::npos);
+  EXPECT_NE(std::get<std::string>(down.normal_ts.metadata.at("space")).find("+y = -v"), std::string::npos);
+}
+
 TEST(Bake, MissesAreCountedAndFilled) {
   const Mesh low = test::make_grid(2, 2);
   Mesh high = make_plane(0, 0, 0.5f);  // out of reach
@@ -715,6 +757,54 @@ TEST(Bake, SameBitsWhateverTheThreadCount) {
         EXPECT_TRUE(same(one.normal_os, many.normal_os));
         EXPECT_TRUE(same(one.coverage, many.coverage));
       }
+}
+
+// The coherent path (the rays of up to 64 neighbouring texels cast as Embree ray streams)
+// against each texel's rays cast on their own (BakeOptions::coherent = false), on the bent
+// brick wall, for the options the coherent path takes: the same queries, so the same counts
+// and coverage, and the same maps within float rounding.
+TEST(Bake, CoherentRaysGiveTheSingleRaysAnswers) {
+  BrickWallOptions w;
+  w.columns = 160;
+  w.rows = 80;
+  const Mesh high = make_brick_wall(w);
+  const Mesh low = make_brick_wall_base(w, 12, 6);
+  Mesh cage = low;
+  for (auto v : cage.vertices()) cage.set_point(v, cage.point(v) + 2.0f * w.amplitude * cage.normal(v));
+  for (int variant = 0; variant < 6; ++variant) {
+    BakeOptions o;
+    o.width = 200;  // not a multiple of the stream's 64: a short run at each row's end
+    o.height = 96;
+    if (variant == 1) o.hit = HitRule::front_else_nearest;
+    if (variant == 2) o.hit = HitRule::front_only;
+    if (variant == 3) o.front = o.back = 0.3f * w.amplitude;  // short reach: misses
+    if (variant == 4) o.cage = &cage;
+    if (variant == 5) o.basis = BakeBasis::pn;
+    SCOPED_TRACE("variant " + std::to_string(variant));
+    const BakeResult fast = bake(low, high, o);
+    o.coherent = false;
+    const BakeResult single = bake(low, high, o);
+    ASSERT_GT(fast.hits, 0u);
+    EXPECT_EQ(fast.hits, single.hits);
+    EXPECT_EQ(fast.misses, single.misses);
+    EXPECT_EQ(fast.ambiguous, single.ambiguous);
+    EXPECT_EQ(fast.rays, single.rays);
+    EXPECT_EQ(fast.face_misses, single.face_misses);
+    EXPECT_EQ(fast.coverage.pixels, single.coverage.pixels);
+    size_t differ = 0;
+    for (size_t i = 0; i < fast.displacement.texel_count(); ++i) {
+      differ += fast.displacement.pixels[i] != single.displacement.pixels[i];
+      for (int c = 0; c < 3; ++c) differ += fast.normal_ts.pixels[3 * i + c] != single.normal_ts.pixels[3 * i + c];
+      ASSERT_NEAR(fast.displacement.pixels[i], single.displacement.pixels[i], 1e-6f * w.amplitude) << i;
+      for (int c = 0; c < 3; ++c) {
+        ASSERT_NEAR(fast.normal_ts.pixels[3 * i + c], single.normal_ts.pixels[3 * i + c], 1e-5f) << i;
+        ASSERT_NEAR(fast.normal_os.pixels[3 * i + c], single.normal_os.pixels[3 * i + c], 1e-5f) << i;
+      }
+    }
+    // Embree's packet kernels round some hits' t, u, v differently in the last bits from its
+    // single-ray ones (within the tolerances above): a few values differ, no more.
+    EXPECT_LT(differ, fast.displacement.texel_count() * 4 / 50) << "of " << fast.displacement.texel_count() * 4 << " values";
+  }
 }
 
 // rasterize_uv works in parallel bands of rows: the same samples as one band or one row at

@@ -54,6 +54,7 @@ class RayScene {
     // Context filters (collect()) where Embree was built with filter functions; a query
     // without one (intersect(), occluded()) runs exactly as in a scene without the flag.
     filters_ = rtcGetDeviceProperty(device_, RTC_DEVICE_PROPERTY_FILTER_FUNCTION_SUPPORTED) != 0;
+    streams_ = rtcGetDeviceProperty(device_, RTC_DEVICE_PROPERTY_RAY_STREAM_SUPPORTED) != 0;
     rtcSetSceneFlags(scene_, filters_ ? RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION : RTC_SCENE_FLAG_ROBUST);
     rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
     RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_QUAD);
@@ -147,10 +148,44 @@ class RayScene {
     rtcIntersect1(scene_, &cc.ctx, &rh);
     return !out.overflow;
   }
+  // Ray streams: m rays of neighbouring texels at once, which Embree traces as packets
+  // (RTC_INTERSECT_CONTEXT_FLAG_COHERENT: its packet kernels, 16 rays wide with AVX-512).
+  // rays[j].ray.id must be j. collect_coherent() is collect() for each: out[j] gets ray j's
+  // candidates over its [tnear, tfar] and windows[j], and its return value (false on
+  // overflow) is !out[j].overflow; occluded_coherent() sets hit[j] to occluded() of ray j.
+  // The traversal order differs from the single-ray queries', which changes nothing (collect
+  // reports every candidate within its window whatever the order), but Embree's packet
+  // kernels may round a hit's t, u, v differently in the last bits from its single-ray ones.
+  // Call them only where streams() holds, collect_coherent() only where filters() does too.
+  static constexpr unsigned kMaxStream = 64;
+  void collect_coherent(RTCRayHit* rays, unsigned m, const float* windows, Candidates* out) const {
+    StreamContext sc;
+    rtcInitIntersectContext(&sc.ctx);
+    sc.ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    sc.ctx.filter = &StreamContext::filter;
+    sc.scene = this;
+    sc.out = out;
+    sc.windows = windows;
+    for (unsigned j = 0; j < m; ++j) {
+      out[j].n = 0;
+      out[j].overflow = false;
+      sc.caps[j] = rays[j].ray.tfar;
+    }
+    rtcIntersect1M(scene_, &sc.ctx, rays, m, sizeof(RTCRayHit));
+  }
+  void occluded_coherent(RTCRay* rays, unsigned m, bool* hit) const {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    rtcOccluded1M(scene_, &ctx, rays, m, sizeof(RTCRay));
+    for (unsigned j = 0; j < m; ++j) hit[j] = rays[j].tfar < 0;
+  }
   // Embree primitives: the mesh's triangles paired into quads (see Pair).
   size_t quad_count() const { return pairs_.size(); }
   // Whether collect() can run (else it returns false at once, casting nothing).
   bool filters() const { return filters_; }
+  // Whether Embree was built with ray streams (rtcIntersect1M), for the *_coherent queries.
+  bool streams() const { return streams_; }
   const MeshArrays& arrays() const { return arrays_; }
   // A vertex's position relative to the scene's origin.
   Eigen::Vector3d position(uint32_t vertex) const {
@@ -194,6 +229,36 @@ class RayScene {
         }
         self->cap = std::min(self->cap, t + self->window);
         RTCRayN_tfar(args->ray, args->N, i) = std::max(self->cap, t);
+      }
+    }
+  };
+
+  // collect_coherent()'s context: CollectContext's filter per ray of the stream, told apart
+  // by their ids (Embree hands the filter its own packets of the stream's rays, N lanes).
+  struct StreamContext {
+    RTCIntersectContext ctx;  // first: Embree passes &ctx
+    const RayScene* scene = nullptr;
+    Candidates* out = nullptr;
+    const float* windows = nullptr;
+    float caps[kMaxStream];
+    static void filter(const RTCFilterFunctionNArguments* args) {
+      auto* self = reinterpret_cast<StreamContext*>(args->context);
+      for (unsigned i = 0; i < args->N; ++i) {
+        if (args->valid[i] == 0) continue;
+        const unsigned j = RTCRayN_id(args->ray, args->N, i);
+        const float t = RTCRayN_tfar(args->ray, args->N, i);
+        Candidates& c = self->out[j];
+        if (c.n < kMaxCandidates) {
+          Candidate& h = c.hit[c.n++];
+          h.t = t;
+          self->scene->to_triangle(RTCHitN_primID(args->hit, args->N, i), RTCHitN_u(args->hit, args->N, i),
+                                   RTCHitN_v(args->hit, args->N, i), h.prim, h.u, h.v);
+        } else {
+          c.overflow = true;
+        }
+        float& cap = self->caps[j];
+        cap = std::min(cap, t + self->windows[j]);
+        RTCRayN_tfar(args->ray, args->N, i) = std::max(cap, t);
       }
     }
   };
@@ -325,6 +390,7 @@ class RayScene {
   std::vector<uint32_t> quads_;
   std::vector<Pair> pairs_;
   bool filters_ = false;
+  bool streams_ = false;
   RTCDevice device_ = nullptr;
   RTCScene scene_ = nullptr;
 };

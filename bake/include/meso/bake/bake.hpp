@@ -31,6 +31,14 @@ const char* hit_rule_name(HitRule r);
 // normals, for renderers that tessellate the base into that surface.
 enum class BakeBasis { linear, pn };
 
+// Which way the green (y) channel of the tangent-space normal map points. The tangent frame
+// is the same (MikkTSpace) either way; engines differ only in the sign of y.
+enum class NormalY {
+  up,    // +y = +v: OpenGL, glTF 2.0, Blender, Unity ("Y+")
+  down,  // +y = -v (green = -v): DirectX, Unreal Engine ("Y-"); up's map with y negated
+};
+const char* normal_y_name(NormalY y);
+
 struct BakeOptions {
   int width = 1024, height = 1024;
   // Ray reach in object units in front of (along +normal) and behind the base surface.
@@ -66,6 +74,16 @@ struct BakeOptions {
   // tilts the high normal, as in the course notes' ray-caster. Needs UVs on the high mesh.
   const Image* detail = nullptr;
   float detail_scale = 0.0f;
+  // The green convention of normal_ts: down negates its y component texel for texel (after
+  // the dilation: exactly up's map with y negated), and nothing else. Recorded in its metadata
+  // ("space", "normal_y").
+  NormalY normal_y = NormalY::up;
+  // Cast the first queries of neighbouring texels together as Embree ray streams (its
+  // packet kernels), where the options allow it: one sample per texel, no match_by_name with
+  // several parts, a rule other than furthest, without ignore_backfaces. The same queries
+  // and hit rules as false (each texel's rays on their own, the reference the tests compare
+  // with), faster; Embree's packet kernels may round a hit in the last bits differently.
+  bool coherent = true;
 };
 
 // Whether `cage` can serve as a cage of `base`: same vertex count and the same vertices on
@@ -77,7 +95,8 @@ struct BakeResult {
   // object units, positive outward. One channel.
   Image displacement;
   // The high mesh's normal in the base's tangent space (tangent_frame.hpp), components in
-  // [-1, 1], three channels; (0, 0, 1) where the surfaces are parallel.
+  // [-1, 1], three channels; (0, 0, 1) where the surfaces are parallel. y along +v, or -v
+  // with options.normal_y == down.
   Image normal_ts;
   // Where the rays found the high surface: 1 channel, 1 = hit, 0.75 = a hit whose choice
   // was ambiguous, 0.5 = covered by a base face but no hit within reach (a miss), 0 =
