@@ -434,6 +434,14 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
     const RayScene::Candidate& h = c.hit[first];
     for (int j = 0; j < c.n; ++j)
       if (c.hit[j].t == h.t && c.hit[j].prim != h.prim) return false;  // a tie: Embree's pick
+    if (given && given->collected) {
+      // A ray stream's packet kernels may round t a few units in the last place differently
+      // from a single ray's: another triangle that close is a tie the single ray may order the
+      // other way, so the single ray's own loop decides (the same answer as trace()).
+      const float near_tie = h.t + 1e-5f * (h.t + eps);
+      for (int j = 0; j < c.n; ++j)
+        if (c.hit[j].prim != h.prim && c.hit[j].t <= near_tie) return false;
+    }
     const RayHit rh = make_hit(sr, way, h.t, h.prim, h.u, h.v);
     if (!(o.hit == HitRule::nearest || rh.front)) return false;  // the loop goes on
     const float tnear = std::nextafter(h.t, tfar) + 1e-7f * (h.t + eps);
@@ -603,6 +611,7 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
 
   building.wait();
   std::vector<uint64_t> row_rays(static_cast<size_t>(o.height), 0);  // summed in row order below
+  std::vector<uint64_t> row_stream_rays(static_cast<size_t>(o.height), 0);
   // The coherent path (one sample per texel, one scene, a rule whose first queries are known
   // in advance): the texels of a run of up to kMaxStream in a row (fixed positions: the
   // same runs whatever the thread count) are set up, their outward collect() queries cast as
@@ -644,6 +653,7 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
     std::array<unsigned, kRun> inward_lane{};
     for (int y = rows.begin(); y < rows.end(); ++y) {
       uint64_t rays = 0;  // local: rows of other threads share the vector's cache lines
+      uint64_t stream_rays = 0;
       if (coherent) {
         const RayScene& scene = *parts[0].scene;
         for (int x0 = 0; x0 < o.width; x0 += static_cast<int>(kRun)) {
@@ -659,7 +669,11 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
             if (!setup(s.face, s.bary, lane.sr)) continue;
             // gather(+1)'s first query: collect() from eps behind the base point.
             const float tfar = lane.sr.front_reach + eps;
-            outward[m] = RayScene::ray_hit(start_at(lane.sr, -eps), lane.sr.d, 0.0f, tfar);
+            const Vec3f from = start_at(lane.sr, -eps);
+            // (A non-finite origin would spoil the culling of its whole packet; setup() lets
+            // none through today. Such a ray finds nothing on its own either: a miss.)
+            if (!(std::isfinite(from[0]) && std::isfinite(from[1]) && std::isfinite(from[2]))) continue;
+            outward[m] = RayScene::ray_hit(from, lane.sr.d, 0.0f, tfar);
             outward[m].ray.id = m;
             windows[m] = collect_window(tfar);
             ++m;
@@ -684,6 +698,7 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
             }
           }
           if (k > 0) scene.occluded_coherent(inward.data(), k, occluded.data());
+          stream_rays += m + k;
           for (unsigned q = 0; q < k; ++q) {
             Answers& given = lanes[inward_lane[q]].given;
             given.has_occluded = true;
@@ -698,6 +713,7 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
           }
         }
         row_rays[static_cast<size_t>(y)] = rays;
+        row_stream_rays[static_cast<size_t>(y)] = stream_rays;
         progress.advance(1);
         continue;
       }
@@ -737,6 +753,7 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
   });
   progress.end();
   for (const uint64_t n : row_rays) r.rays += n;
+  for (const uint64_t n : row_stream_rays) r.stream_rays += n;
 
   r.coverage = Image(o.width, o.height, 1, 0.0f);
   r.face_texels.assign(low.n_faces(), 0);

@@ -785,6 +785,9 @@ TEST(Bake, CoherentRaysGiveTheSingleRaysAnswers) {
     o.coherent = false;
     const BakeResult single = bake(low, high, o);
     ASSERT_GT(fast.hits, 0u);
+    // The streams did the work: most queries went out in them (none without coherent).
+    EXPECT_GT(fast.stream_rays, fast.rays / 2);
+    EXPECT_EQ(single.stream_rays, 0u);
     EXPECT_EQ(fast.hits, single.hits);
     EXPECT_EQ(fast.misses, single.misses);
     EXPECT_EQ(fast.ambiguous, single.ambiguous);

@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <array>
+#include <limits>
 #include <random>
 
 namespace meso {
@@ -205,4 +206,80 @@ TEST(RayScene, DeletedFacesAreLeftOutAndTheRestHitAsTriangles) {
 }
 
 }  // namespace
+// The ray streams answer as the single rays do: through 20 stacked layers (a window wide
+// enough for all of them overflows the 16 candidates; narrower ones hold a few), 64 rays of
+// a stream get the same candidates within their windows (triangles, and t, u, v to the
+// packet kernels' rounding) as collect() gives each on its own, and occluded_coherent() the
+// same answers as occluded(), for rays going up and down.
+TEST(RayScene, StreamsAnswerAsSingleRays) {
+  std::vector<std::pair<float, bool>> layers;
+  for (int k = 0; k < 20; ++k) layers.emplace_back(0.05f * static_cast<float>(k), k % 2 == 0);
+  const Mesh mesh = test::make_layers(layers);
+  const RayScene scene(mesh, Eigen::Vector3d::Zero());
+  if (!scene.streams() || !scene.filters()) GTEST_SKIP() << "this Embree has no ray streams or filter functions";
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  int compared = 0, overflowed = 0;
+  for (int round = 0; round < 8; ++round) {
+    constexpr unsigned m = RayScene::kMaxStream;
+    std::vector<RTCRayHit> rays(m);
+    std::vector<RTCRay> probes(m);
+    std::array<float, m> windows{};
+    std::vector<RayScene::Candidates> streamed(m);
+    for (unsigned j = 0; j < m; ++j) {
+      // From below or above the stack, steep enough to stay over the layers.
+      const bool up = (j + static_cast<unsigned>(round)) % 2 == 0;
+      const Vec3f org(0.2f + 0.6f * unit(rng), 0.2f + 0.6f * unit(rng), up ? -0.1f : 1.1f);
+      const Vec3f dir = Vec3f(0.2f * (unit(rng) - 0.5f), 0.2f * (unit(rng) - 0.5f), up ? 1.0f : -1.0f).normalized();
+      rays[j] = RayScene::ray_hit(org, dir, 0.0f, 0.9f + 0.5f * unit(rng));
+      rays[j].ray.id = j;
+      windows[j] = std::array<float, 4>{0.0f, 0.07f, 0.3f, 2.0f}[j % 4];
+      probes[j] = RayScene::ray_hit(org, dir, 0.0f, 0.03f + 0.2f * unit(rng)).ray;
+      probes[j].id = j;
+    }
+    const std::vector<RTCRayHit> sent = rays;
+    scene.collect_coherent(rays.data(), m, windows.data(), streamed.data());
+    std::array<bool, m> hit{};
+    std::vector<RTCRay> probes_sent = probes;
+    scene.occluded_coherent(probes.data(), m, hit.data());
+    for (unsigned j = 0; j < m; ++j) {
+      const RTCRay& r = sent[j].ray;
+      const Vec3f org(r.org_x, r.org_y, r.org_z), dir(r.dir_x, r.dir_y, r.dir_z);
+      RayScene::Candidates single;
+      const bool ok = scene.collect(org, dir, r.tnear, r.tfar, windows[j], single);
+      // What collect() promises: every triangle within the window past the nearest hit.
+      // Beyond it, which candidates get recorded (and so whether 16 overflow) depends on the
+      // traversal order, which differs between packets and single rays.
+      if (ok && !streamed[j].overflow) {
+        auto within = [&](const RayScene::Candidates& c) {
+          float nearest = std::numeric_limits<float>::infinity();
+          for (int k = 0; k < c.n; ++k) nearest = std::min(nearest, c.hit[k].t);
+          std::vector<RayScene::Candidate> in;
+          for (int k = 0; k < c.n; ++k)
+            if (c.hit[k].t <= nearest + windows[j] * (1 - 1e-4f) - 1e-6f) in.push_back(c.hit[k]);
+          std::sort(in.begin(), in.end(), [](const RayScene::Candidate& a, const RayScene::Candidate& b) { return a.prim < b.prim; });
+          return in;
+        };
+        const auto a = within(streamed[j]), b = within(single);
+        ASSERT_EQ(a.size(), b.size()) << "ray " << j;
+        for (size_t k = 0; k < a.size(); ++k) {
+          EXPECT_EQ(a[k].prim, b[k].prim) << "ray " << j;
+          EXPECT_NEAR(a[k].t, b[k].t, 1e-6f) << "ray " << j;
+          EXPECT_NEAR(a[k].u, b[k].u, 1e-5f) << "ray " << j;
+          EXPECT_NEAR(a[k].v, b[k].v, 1e-5f) << "ray " << j;
+        }
+        ++compared;
+      } else {
+        overflowed += !ok && streamed[j].overflow;
+      }
+      const RTCRay& p = probes_sent[j];
+      EXPECT_EQ(hit[j], scene.occluded(Vec3f(p.org_x, p.org_y, p.org_z), Vec3f(p.dir_x, p.dir_y, p.dir_z), p.tnear, p.tfar)) << "probe " << j;
+    }
+  }
+  // Both kinds of rays occurred: compared candidate sets, and the widest windows overflowing
+  // in both.
+  EXPECT_GT(compared, 8 * 64 / 2);
+  EXPECT_GT(overflowed, 0);
+}
+
 }  // namespace meso

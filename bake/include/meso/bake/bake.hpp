@@ -108,6 +108,7 @@ struct BakeResult {
   // Rays cast (Embree queries: intersect, occluded and multi-hit collect, each one
   // traversal), summed over rows in order: the same whatever the thread count.
   uint64_t rays = 0;
+  uint64_t stream_rays = 0;  // of those, the ones cast in ray streams (BakeOptions::coherent)
   // Per base face (face order): covered texels, misses and ambiguous texels, for the
   // artist's report.
   std::vector<uint32_t> face_texels, face_misses, face_ambiguous;
