@@ -203,6 +203,23 @@ class RayScene {
   }
 
  private:
+  // Both filters' work for lane i of a hit: the candidate recorded (or the overflow noted),
+  // the ray's cap lowered to the nearest candidate's t + window, and the ray's far end set
+  // to it (never below this hit's t, where Embree put it).
+  void record(const RTCFilterFunctionNArguments* args, unsigned i, Candidates& c, float& cap, float window) const {
+    const float t = RTCRayN_tfar(args->ray, args->N, i);
+    if (c.n < kMaxCandidates) {
+      Candidate& h = c.hit[c.n++];
+      h.t = t;
+      to_triangle(RTCHitN_primID(args->hit, args->N, i), RTCHitN_u(args->hit, args->N, i), RTCHitN_v(args->hit, args->N, i), h.prim,
+                  h.u, h.v);
+    } else {
+      c.overflow = true;
+    }
+    cap = std::min(cap, t + window);
+    RTCRayN_tfar(args->ray, args->N, i) = std::max(cap, t);
+  }
+
   // The context of collect(): Embree hands the filter the intersect context it was given.
   // The filter records the candidate and accepts it, then widens the ray's far end from the
   // candidate's t (where Embree put it) to the nearest candidate's t + window: the traversal
@@ -215,21 +232,8 @@ class RayScene {
     float window = 0, cap = 0;
     static void filter(const RTCFilterFunctionNArguments* args) {
       auto* self = reinterpret_cast<CollectContext*>(args->context);
-      for (unsigned i = 0; i < args->N; ++i) {
-        if (args->valid[i] == 0) continue;
-        const float t = RTCRayN_tfar(args->ray, args->N, i);
-        Candidates& c = *self->out;
-        if (c.n < kMaxCandidates) {
-          Candidate& h = c.hit[c.n++];
-          h.t = t;
-          self->scene->to_triangle(RTCHitN_primID(args->hit, args->N, i), RTCHitN_u(args->hit, args->N, i),
-                                   RTCHitN_v(args->hit, args->N, i), h.prim, h.u, h.v);
-        } else {
-          c.overflow = true;
-        }
-        self->cap = std::min(self->cap, t + self->window);
-        RTCRayN_tfar(args->ray, args->N, i) = std::max(self->cap, t);
-      }
+      for (unsigned i = 0; i < args->N; ++i)
+        if (args->valid[i] != 0) self->scene->record(args, i, *self->out, self->cap, self->window);
     }
   };
 
@@ -246,19 +250,7 @@ class RayScene {
       for (unsigned i = 0; i < args->N; ++i) {
         if (args->valid[i] == 0) continue;
         const unsigned j = RTCRayN_id(args->ray, args->N, i);
-        const float t = RTCRayN_tfar(args->ray, args->N, i);
-        Candidates& c = self->out[j];
-        if (c.n < kMaxCandidates) {
-          Candidate& h = c.hit[c.n++];
-          h.t = t;
-          self->scene->to_triangle(RTCHitN_primID(args->hit, args->N, i), RTCHitN_u(args->hit, args->N, i),
-                                   RTCHitN_v(args->hit, args->N, i), h.prim, h.u, h.v);
-        } else {
-          c.overflow = true;
-        }
-        float& cap = self->caps[j];
-        cap = std::min(cap, t + self->windows[j]);
-        RTCRayN_tfar(args->ray, args->N, i) = std::max(cap, t);
+        self->scene->record(args, i, self->out[j], self->caps[j], self->windows[j]);
       }
     }
   };

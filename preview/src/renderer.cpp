@@ -437,22 +437,25 @@ SurfaceRenderer::SurfaceRenderer(const Mesh& base, const PreviewMaps& maps) : ba
 
   glGenVertexArrays(1, &vao_);
   glBindVertexArray(vao_);
-  glGenBuffers(1, &vbo_);
-  glBindBuffer(GL_ARRAY_BUFFER, vbo_);
-  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(verts.size() * sizeof(float)), verts.data(), GL_STATIC_DRAW);
-  const GLint sizes[7] = {3, 3, 2, 4, 2, 3, 2};
-  size_t offset = 0;
-  for (GLuint a = 0; a < 7; ++a) {
-    glEnableVertexAttribArray(a);
-    glVertexAttribPointer(a, sizes[a], GL_FLOAT, GL_FALSE, static_cast<GLsizei>(kStride * sizeof(float)),
-                          reinterpret_cast<const void*>(offset * sizeof(float)));
-    offset += static_cast<size_t>(sizes[a]);
-  }
-  glGenBuffers(1, &ibo_);
-  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ibo_);
-  glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(split.triangles.size() * sizeof(uint32_t)),
-               split.triangles.data(), GL_STATIC_DRAW);
-  glBindVertexArray(0);
+  // The vertex array bound (a fresh one), its vertex and index buffers filled.
+  auto fill_vertex_array = [&](const std::vector<float>& v, const std::vector<uint32_t>& tris, GLuint& vbo, GLuint& ibo) {
+    glGenBuffers(1, &vbo);
+    glBindBuffer(GL_ARRAY_BUFFER, vbo);
+    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(v.size() * sizeof(float)), v.data(), GL_STATIC_DRAW);
+    const GLint sizes[7] = {3, 3, 2, 4, 2, 3, 2};
+    size_t offset = 0;
+    for (GLuint a = 0; a < 7; ++a) {
+      glEnableVertexAttribArray(a);
+      glVertexAttribPointer(a, sizes[a], GL_FLOAT, GL_FALSE, static_cast<GLsizei>(kStride * sizeof(float)),
+                            reinterpret_cast<const void*>(offset * sizeof(float)));
+      offset += static_cast<size_t>(sizes[a]);
+    }
+    glGenBuffers(1, &ibo);
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ibo);
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(tris.size() * sizeof(uint32_t)), tris.data(), GL_STATIC_DRAW);
+    glBindVertexArray(0);
+  };
+  fill_vertex_array(verts, split.triangles, vbo_, ibo_);
   {
     std::vector<float> cut_verts;
     std::vector<uint32_t> cut_tris;
@@ -460,21 +463,8 @@ SurfaceRenderer::SurfaceRenderer(const Mesh& base, const PreviewMaps& maps) : ba
     if (mesh_subdivision_ > 1) {
       glGenVertexArrays(1, &mesh_vao_);
       glBindVertexArray(mesh_vao_);
-      glGenBuffers(1, &mesh_vbo_);
-      glBindBuffer(GL_ARRAY_BUFFER, mesh_vbo_);
-      glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(cut_verts.size() * sizeof(float)), cut_verts.data(), GL_STATIC_DRAW);
-      offset = 0;
-      for (GLuint a = 0; a < 7; ++a) {
-        glEnableVertexAttribArray(a);
-        glVertexAttribPointer(a, sizes[a], GL_FLOAT, GL_FALSE, static_cast<GLsizei>(kStride * sizeof(float)),
-                              reinterpret_cast<const void*>(offset * sizeof(float)));
-        offset += static_cast<size_t>(sizes[a]);
-      }
-      glGenBuffers(1, &mesh_ibo_);
-      glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, mesh_ibo_);
-      glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(cut_tris.size() * sizeof(uint32_t)), cut_tris.data(), GL_STATIC_DRAW);
+      fill_vertex_array(cut_verts, cut_tris, mesh_vbo_, mesh_ibo_);
       mesh_index_count_ = static_cast<GLsizei>(cut_tris.size());
-      glBindVertexArray(0);
     }
   }
 
