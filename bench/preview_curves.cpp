@@ -94,7 +94,8 @@ const char* kUsage =
     "  --relief R           height range in object units (map tile = 1 unit; default 0.05)\n"
     "  --views A,B,...      view angles, degrees from the normal (default 30,60,80,85,89: grazing views included)\n"
     "  --azimuth B          degrees around the normal (default 20)\n"
-    "  --zoom Z             camera zoom for every view (default: per view angle)\n"
+    "  --zoom Z             camera zoom for every view (default: per view angle, 3 or 4, less at grazing\n"
+    "                       views to keep the eye twice the relief above the plane)\n"
     "  --budgets a,b,...    iteration budgets (default 1,2,4,...,256)\n"
     "  --maps a,b,...       among rocks,bricks,mountains (default all three)\n"
     "  --methods a,b,...    methods to run (default: every method preview_methods() lists but the\n"
@@ -217,8 +218,18 @@ Options parse(int argc, char** argv) {
 }
 
 // Zoomed in so that most of the frame sees the plane's interior; the pixels whose rays
-// cross the plane's border inside the relief slab are measured apart (boundary_mask).
-double default_zoom(double view_angle) { return view_angle <= 45 ? 3.0 : 4.0; }
+// cross the plane's border inside the relief slab are measured apart (boundary_mask). At
+// grazing views no closer than keeps the eye twice the relief above the plane's centre: the
+// per-pixel methods start their rays where they enter the top of the relief slab, so an eye
+// inside the slab (at 89° and zoom 4 it stood 0.036 units up, the relief 0.05) is no view
+// they are made for. The eye is radius / sin(fov / 2) / zoom from the centre (eye_of), at
+// cos(angle) of that above the plane; the plane's radius is half its diagonal, tiles sqrt 2 / 2.
+double default_zoom(double view_angle, double relief, int tiles) {
+  const double zoom = view_angle <= 45 ? 3.0 : 4.0;
+  const double radius = 0.5 * std::sqrt(2.0) * tiles, half_fov = 20.0 * kPi / 180.0;
+  const double highest = radius * std::cos(view_angle * kPi / 180.0) / (std::sin(half_fov) * 2.0 * relief);
+  return std::min(zoom, highest);
+}
 
 // ---------------------------------------------------------------- height maps
 
@@ -797,7 +808,7 @@ int main(int argc, char** argv) {
         v.width = v.height = o.pixels;
         v.camera.view_angle = static_cast<float>(view);
         v.camera.azimuth = static_cast<float>(o.azimuth);
-        v.camera.zoom = static_cast<float>(o.zoom > 0 ? o.zoom : default_zoom(view));
+        v.camera.zoom = static_cast<float>(o.zoom > 0 ? o.zoom : default_zoom(view, o.relief, o.tiles));
         v.shade = PreviewShade::uv;
         const auto tr = std::chrono::steady_clock::now();
         const Image ref_uv = reference.render(v);
@@ -872,7 +883,7 @@ int main(int argc, char** argv) {
         v.width = v.height = o.pixels;
         v.camera.view_angle = static_cast<float>(view);
         v.camera.azimuth = static_cast<float>(o.azimuth);
-        v.camera.zoom = static_cast<float>(o.zoom > 0 ? o.zoom : default_zoom(view));
+        v.camera.zoom = static_cast<float>(o.zoom > 0 ? o.zoom : default_zoom(view, o.relief, o.tiles));
         v.shade = PreviewShade::lit;
         const int b = o.budgets[o.budgets.size() / 2];
         CompareOptions co;
