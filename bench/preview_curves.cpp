@@ -75,6 +75,7 @@ struct Options {
   double target = 0.01; // wrong-hit fraction for the equal-error comparison
   double uv_tolerance = 1.0;
   double reference_edge = 0.5;  // texels: the reference's longest sub-triangle edge
+  size_t reference_cap = 0;     // 0: ReferenceOptions' default cap on triangles and cells
   bool triangulated_reference = false;  // tessellate the flat plane too (the reference before the exact cells)
   std::vector<std::string> maps = {"rocks", "bricks", "mountains"};
   std::vector<double> views = {30, 60, 80, 85, 89};
@@ -107,6 +108,8 @@ const char* kUsage =
     "  --reference-edge E   texels; the reference's longest sub-triangle edge (default 0.5): smaller\n"
     "                       follows the bilinear surface more closely, at 4x the triangles per halving\n"
     "                       (only with --triangulated-reference: the plane is flat, intersected exactly)\n"
+    "  --reference-cap N    cap on the reference's triangles and exact cells (default 2^25; a plane of\n"
+    "                       more tiles needs more to stay exact: about 110 bytes each)\n"
     "  --triangulated-reference  tessellate the plane as well instead of intersecting the bilinear\n"
     "                       height surface cell by cell (the reference before it was exact)\n"
     "  --no-check           skip the cross-check against compare_methods()\n"
@@ -116,6 +119,7 @@ const char* kUsage =
 ReferenceOptions reference_options_of(const Options& o) {
   ReferenceOptions r;
   r.max_edge_texels = o.reference_edge;
+  if (o.reference_cap > 0) r.max_triangles = o.reference_cap;
   r.bilinear_patches = !o.triangulated_reference;
   return r;
 }
@@ -164,7 +168,7 @@ Options parse(int argc, char** argv) {
       o.triangulated_reference = true;
       continue;
     }
-    static const std::set<std::string> valued = {"--out", "--map-size", "--pixels", "--tiles", "--relief", "--views", "--azimuth", "--zoom",
+    static const std::set<std::string> valued = {"--out", "--map-size", "--pixels", "--tiles", "--relief", "--views", "--azimuth", "--zoom", "--reference-cap",
                                                  "--budgets", "--maps", "--methods", "--repetitions", "--target", "--uv-tolerance", "--reference-edge"};
     if (!valued.count(a)) usage_error("unknown option '" + a + "'");
     if (i + 1 >= argc) usage_error(a + " needs a value");
@@ -189,6 +193,7 @@ Options parse(int argc, char** argv) {
     if (k == "--target") o.target = to_number(k, v);
     if (k == "--uv-tolerance") o.uv_tolerance = to_number(k, v);
     if (k == "--reference-edge") o.reference_edge = to_number(k, v);
+    if (k == "--reference-cap") o.reference_cap = static_cast<size_t>(to_number(k, v));
     if (k == "--methods") o.methods = bench::split_commas(v);
     if (k == "--maps") {
       o.maps = bench::split_commas(v);
