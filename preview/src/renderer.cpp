@@ -219,9 +219,6 @@ int method_index(const std::string& name) {
   return static_cast<int>(it - m.begin());
 }
 
-namespace {
-
-// One shader stage from its pieces, concatenated in order (the first starts with #version).
 GLuint compile(GLenum type, std::initializer_list<const char*> pieces) {
   const std::vector<const char*> src(pieces);
   const GLuint s = glCreateShader(type);
@@ -237,9 +234,7 @@ GLuint compile(GLenum type, std::initializer_list<const char*> pieces) {
   return s;
 }
 
-// Links the compiled stages into a program (and deletes the stages); `feedback`: a vertex
-// output to capture with transform feedback.
-GLuint link(std::initializer_list<GLuint> stages, const char* feedback = nullptr) {
+GLuint link(std::initializer_list<GLuint> stages, const char* feedback) {
   const GLuint program = glCreateProgram();
   for (GLuint s : stages) glAttachShader(program, s);
   if (feedback) glTransformFeedbackVaryings(program, 1, &feedback, GL_INTERLEAVED_ATTRIBS);
@@ -254,6 +249,8 @@ GLuint link(std::initializer_list<GLuint> stages, const char* feedback = nullptr
   }
   return program;
 }
+
+namespace {
 
 // Every sampler of the fragment stage on its own texture unit, fixed for the program's life:
 // two sampler types on one unit (all default to unit 0) make every draw invalid, even with
@@ -936,9 +933,10 @@ void SurfaceRenderer::draw(const PreviewOptions& o, int width, int height) {
     glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, sizeof zero, &zero);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, vertex_work_);
     glPatchParameteri(GL_PATCH_VERTICES, 3);
-    // A few patches per draw call: Mesa's llvmpipe drops the output of a draw whose patches
-    // generate more than about 2^16 vertices (seen as missing patches; a patch at level 64
-    // makes about 3,100), so no draw here makes more than 16 patches' worth.
+    // A few patches per draw call: with all patches in one draw, Mesa's llvmpipe dropped
+    // part of the output of large tessellations (an 8 x 8 grid at a segment per texel of a
+    // 256² map lost 13,666 of its pixels; where its limit lies was not measured). 16 per call
+    // draws every patch (Measure.PerVertexMethodsDrawEveryPatchAndMeshASegmentPerTexel).
     const bool cut = o.method == "mesh" && mesh_vao_;
     if (cut) glBindVertexArray(mesh_vao_);
     const GLsizei count = cut ? mesh_index_count_ : index_count_;

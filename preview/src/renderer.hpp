@@ -10,10 +10,19 @@
 #include <epoxy/gl.h>
 
 #include <array>
+#include <initializer_list>
 #include <memory>
 #include <vector>
 
 namespace meso {
+
+// One shader stage from its pieces, concatenated in order (the first starts with #version).
+// Throws InternalError with the compiler's log.
+GLuint compile(GLenum type, std::initializer_list<const char*> pieces);
+
+// Links the compiled stages into a program (and deletes the stages); `feedback`: a vertex
+// output to capture with transform feedback. Throws InternalError with the linker's log.
+GLuint link(std::initializer_list<GLuint> stages, const char* feedback = nullptr);
 
 class SurfaceRenderer {
  public:

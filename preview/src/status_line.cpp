@@ -1,6 +1,7 @@
 #include "status_line.hpp"
 
-#include "meso/core/error.hpp"
+#include "renderer.hpp"
+
 #include "meso/preview/preview.hpp"
 
 #include <stb/stb_easy_font.h>
@@ -29,16 +30,6 @@ layout(location = 0) out vec4 out_color;
 void main() { out_color = u_color; }
 )";
 
-GLuint stage(GLenum type, const char* source) {
-  const GLuint s = glCreateShader(type);
-  glShaderSource(s, 1, &source, nullptr);
-  glCompileShader(s);
-  GLint ok = 0;
-  glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
-  if (!ok) throw InternalError("preview: the status line's shader does not compile");
-  return s;
-}
-
 // Two triangles per quad of stb_easy_font's output (x, y, z float and 4 colour bytes per
 // corner, corners in order around the quad).
 void append_quads(const std::vector<unsigned char>& buffer, int quads, std::vector<float>& out) {
@@ -55,16 +46,7 @@ void append_quads(const std::vector<unsigned char>& buffer, int quads, std::vect
 }  // namespace
 
 StatusLine::StatusLine() {
-  const GLuint vs = stage(GL_VERTEX_SHADER, kVertex), fs = stage(GL_FRAGMENT_SHADER, kFragment);
-  program_ = glCreateProgram();
-  glAttachShader(program_, vs);
-  glAttachShader(program_, fs);
-  glLinkProgram(program_);
-  glDeleteShader(vs);
-  glDeleteShader(fs);
-  GLint ok = 0;
-  glGetProgramiv(program_, GL_LINK_STATUS, &ok);
-  if (!ok) throw InternalError("preview: the status line's shaders do not link");
+  program_ = link({compile(GL_VERTEX_SHADER, {kVertex}), compile(GL_FRAGMENT_SHADER, {kFragment})});
   glCreateVertexArrays(1, &vao_);
   glCreateBuffers(1, &vbo_);
   glVertexArrayVertexBuffer(vao_, 0, vbo_, 0, 2 * sizeof(float));
