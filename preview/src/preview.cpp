@@ -305,7 +305,10 @@ WindowRun run_window(const Mesh& base, const PreviewMaps& maps, const PreviewOpt
   SurfaceRenderer renderer(base, maps);
   double ms = 0;
   WindowRun run;
+  // The last kTimes frame times (a ring: a window left open for hours keeps a bounded buffer).
+  constexpr size_t kTimes = 256;
   std::vector<double> times;
+  times.reserve(kTimes);
   while (!glfwWindowShouldClose(window)) {
     const auto t0 = std::chrono::steady_clock::now();
     int w = 0, h = 0;
@@ -316,7 +319,11 @@ WindowRun run_window(const Mesh& base, const PreviewMaps& maps, const PreviewOpt
     if (w > 0 && h > 0) renderer.draw(frame, w, h);
     glFinish();
     ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    times.push_back(ms);
+    if (times.size() < kTimes) {
+      times.push_back(ms);
+    } else {
+      times[static_cast<size_t>(run.frames) % kTimes] = ms;
+    }
     ++run.frames;
     if (frames > 0 && run.frames >= frames && w > 0 && h > 0) {
       run.last_frame = Image(w, h, 4);

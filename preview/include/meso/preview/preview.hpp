@@ -351,7 +351,7 @@ Image fetch_heatmap(const Image& fetches, double max_fetches);
 // Throws InternalError when no display is available.
 struct WindowRun {
   int frames = 0;          // frames drawn
-  double median_ms = 0;    // draw time per frame (CPU clock around draw and glFinish)
+  double median_ms = 0;    // draw time per frame, median of the last 256 (CPU clock around draw and glFinish)
   Image last_frame;        // with frames > 0 only
 };
 WindowRun run_window(const Mesh& base, const PreviewMaps& maps, const PreviewOptions& options, int frames = 0);
