@@ -27,5 +27,21 @@ TEST(HugePages, LargeBlocksAreAlignedAndHoldTheirValues) {
   EXPECT_EQ(copy, small);
 }
 
+// Elements made without a value are default-initialised: a type with member initialisers
+// gets them (bake's TexelSample relies on it), and a value given still fills.
+TEST(HugePages, ElementsWithoutAValueAreDefaultInitialised) {
+  struct Sample {
+    int face = -1;
+    float weight = 0.25f;
+  };
+  LargeVector<Sample> samples(kHugePageThreshold / sizeof(Sample) + 1);
+  EXPECT_EQ(samples.back().face, -1);
+  EXPECT_EQ(samples[samples.size() / 2].weight, 0.25f);
+  LargeVector<float> zeros(kHugePageThreshold / sizeof(float) + 1, 0.0f);
+  EXPECT_EQ(zeros.back(), 0.0f);
+  zeros.resize(zeros.size() + 10, 2.0f);
+  EXPECT_EQ(zeros.back(), 2.0f);
+}
+
 }  // namespace
 }  // namespace meso

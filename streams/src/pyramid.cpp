@@ -20,12 +20,22 @@ Image footprint_min_max(const HeightField& f) {
     for (int y = rows.begin(); y < rows.end(); ++y) {
       for (int x = 0; x < w; ++x) {
         // The 9 points of the texel (pixel units): corners average four texels, edge
-        // midpoints two, the centre is the texel itself.
-        float lo = f.texel(x, y), hi = lo;
+        // midpoints two, the centre is the texel itself. Each is f.bilinear() at
+        // (x + 0.5 + 0.5 dx, y + 0.5 + 0.5 dy), the same blend of the same texels, read once
+        // from the 3 x 3 neighbourhood: bilinear() blends texels ix, ix + 1 at weight tx with
+        // (ix, tx) = (x - 1, 1/2), (x, 0), (x, 1/2) for dx = -1, 0, 1 (and so in y).
+        float n[3][3];
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) n[dy + 1][dx + 1] = f.texel(x + dx, y + dy);
+        float lo = n[1][1], hi = lo;
         for (int dy = -1; dy <= 1; ++dy) {
+          const int iy = dy < 0 ? 0 : 1;
+          const float ty = dy == 0 ? 0.0f : 0.5f;
           for (int dx = -1; dx <= 1; ++dx) {
             if (dx == 0 && dy == 0) continue;
-            const float v = f.bilinear(x + 0.5 + 0.5 * dx, y + 0.5 + 0.5 * dy);
+            const int ix = dx < 0 ? 0 : 1;
+            const float tx = dx == 0 ? 0.0f : 0.5f;
+            const float v = bilinear_blend(n[iy][ix], n[iy][ix + 1], n[iy + 1][ix], n[iy + 1][ix + 1], tx, ty);
             lo = std::min(lo, v);
             hi = std::max(hi, v);
           }

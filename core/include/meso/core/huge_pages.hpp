@@ -8,14 +8,20 @@
 // for them (/sys/kernel/mm/transparent_hugepage/enabled = madvise, Debian's default): a
 // block aligned to 2 MiB and advised MADV_HUGEPAGE before its first touch.
 //
-// Guarantees: the memory and its contents are those of std::allocator (only the backing
-// pages differ), so results are unchanged; blocks under kHugePageThreshold are ordinary
-// operator new allocations; where the kernel refuses the advice (THP off, another OS) the
-// block is an ordinary aligned allocation.
+// Guarantees: the memory is that of std::allocator (only the backing pages differ); blocks
+// under kHugePageThreshold are ordinary operator new allocations; where the kernel refuses
+// the advice (THP off, another OS) the block is an ordinary aligned allocation. One
+// difference in contents: elements made without a value (LargeVector<T>(n), resize(n)) are
+// default-initialised, as by new T[n], so trivial types (float, int) are left unwritten. A
+// buffer that is then filled in parallel is first touched, and its pages faulted in, by the
+// threads that fill it, not zeroed first by one thread (a 2 GiB distance field: the serial
+// zeroing was a quarter of the build). Pass a value (v(n, 0.0f), assign) to have it filled.
 #pragma once
 
 #include <cstddef>
 #include <new>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 namespace meso {
@@ -39,6 +45,15 @@ struct HugePageAllocator {
     return static_cast<T*>(huge_page_allocate(n * sizeof(T)));
   }
   void deallocate(T* p, size_t n) noexcept { huge_page_deallocate(p, n * sizeof(T)); }
+  // Made without a value: default-initialised (see above). With values: as std::allocator.
+  template <class U>
+  void construct(U* p) noexcept(std::is_nothrow_default_constructible_v<U>) {
+    ::new (static_cast<void*>(p)) U;
+  }
+  template <class U, class... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
   template <class U>
   bool operator==(const HugePageAllocator<U>&) const noexcept { return true; }
   template <class U>

@@ -23,10 +23,10 @@ struct DistanceFieldOptions {
 // the footprint (the pyramid's level-0 maximum). S' contains everything below the filtered
 // surface, so the value never exceeds the distance to it: a sphere of that radius around the
 // voxel centre is empty (0 inside S'). With Border::wrap the map is taken as one tile of a
-// periodic surface, and boxes of the neighbouring tiles count too. With Border::wrap the map is taken as one tile of a
-// periodic surface, and boxes of the neighbouring tiles count too. Exact: computed as the lower envelope of parabolas
-// (Felzenszwalb & Huttenlocher 2012) on a grid of half-texel spacing, where every nearest
-// point of a box to a texel centre lies; O(W H D), parallel over slices, deterministic.
+// periodic surface, and boxes of the neighbouring tiles count too. Exact: computed as the
+// lower envelope of parabolas (Felzenszwalb & Huttenlocher 2012) over the texel edges and the
+// query's own texel centre, where every nearest point of a box to a texel centre lies;
+// O(W H D), parallel over slices, deterministic.
 struct DistanceField {
   int width = 0, height = 0, depth = 0;
   float relief = 0.1f;
