@@ -1,8 +1,9 @@
 // A small driver over build_cone_map on the maps of BM_ConeMap, for instruction counts
 // (valgrind --tool=callgrind) and for checking that outputs stay byte-identical:
-//   cone_time MAP SIZE RELAXED [THREADS [OUT.raw]]
+//   cone_time MAP SIZE RELAXED [THREADS [OUT.raw [TOLERANCE]]]
 // MAP: 0 = the example's bricks, 1 = uniform noise, 2 = smooth bumps (as bench/stages_bench.cpp).
-// OUT.raw receives the cone map's float pixels as they are in memory.
+// OUT.raw receives the cone map's float pixels as they are in memory ("-": none); TOLERANCE
+// is ConeMapOptions::tolerance.
 #include "meso/streams/cone_map.hpp"
 
 #include "bench_maps.hpp"
@@ -12,11 +13,12 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <string>
 
 int main(int argc, char** argv) {
   using namespace meso;
   if (argc < 4) {
-    std::fprintf(stderr, "usage: cone_time MAP SIZE RELAXED [THREADS [OUT.raw]]\n");
+    std::fprintf(stderr, "usage: cone_time MAP SIZE RELAXED [THREADS [OUT.raw [TOLERANCE]]]\n");
     return 2;
   }
   const int kind = std::atoi(argv[1]), n = std::atoi(argv[2]);
@@ -26,11 +28,12 @@ int main(int argc, char** argv) {
   const HeightField f = bench::bench_height_field(static_cast<bench::BenchMap>(kind), n);
   ConeMapOptions o;
   o.kind = relaxed ? ConeKind::relaxed : ConeKind::conservative;
+  if (argc > 6) o.tolerance = std::atof(argv[6]);
   const auto start = std::chrono::steady_clock::now();
   const Image cone = build_cone_map(f, o);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::printf("map %d %dx%d %s: %.3f s\n", kind, n, n, relaxed ? "relaxed" : "conservative", seconds);
-  if (argc > 5) {
+  if (argc > 5 && std::string(argv[5]) != "-") {
     std::FILE* out = std::fopen(argv[5], "wb");
     if (out == nullptr) return 3;
     std::fwrite(cone.pixels.data(), sizeof(float), cone.pixels.size(), out);

@@ -1073,7 +1073,8 @@ bool rises_away(const float* box, const Rect& r, const Rect& f) {
 }
 
 // Upper bound of S(y) - psi dist(y, F) - T over the rectangle r (disjoint from F's
-// interior), from the node's plane: the exact maximum of h(y) = plane(y) - psi dist(y, F).
+// interior), from the node's plane: the exact maximum of h(y) = plane(y) - psi dist(y, F)
+// when it is positive; when it is not, some value <= 0 that bounds it.
 // h is concave (affine minus a convex distance), so its maximum over r lies on r's boundary
 // (an interior stationary point needs |g| = psi, where h is constant along a ray that
 // reaches the boundary anyway). Along an edge, dist is |x - e| beside F or
@@ -1082,6 +1083,23 @@ bool rises_away(const float* box, const Rect& r, const Rect& f) {
 double plane_excess(const float* plane, const Rect& r, const Rect& f, double top, double psi) {
   const double a = plane[0] - top, gx = plane[1], gy = plane[2];
   const double ncx = 0.5 * (r.x0 + r.x1), ncy = 0.5 * (r.y0 + r.y1);
+  // First a bound with one square root, which settles most calls (the caller compares the
+  // answer with 0 only): dist(y, F) >= n . (y - p) for p the point of F nearest r's centre
+  // and n the unit direction from p to that centre (F is convex and n lies in its normal cone
+  // at p), so h(y) <= a + g . (y - centre) - psi n . (y - p), an affine function whose maximum
+  // over r is its value at the centre plus the half-extents times the absolute slopes. Tight
+  // to first order in r's angular size seen from F, the regime in which planes are tested.
+  // (Smooth bumps at 512²: 87 % of the calls that end <= 0 end here; 256²: -25 % instructions,
+  // bricks -3 %, noise +2 %.)
+  {
+    const double dx = ncx - std::clamp(ncx, f.x0, f.x1), dy = ncy - std::clamp(ncy, f.y0, f.y1);
+    const double d = length(dx, dy);
+    if (d > 0) {
+      const double nx = dx / d, ny = dy / d;
+      const double bound = a - psi * d + std::abs(gx - psi * nx) * 0.5 * (r.x1 - r.x0) + std::abs(gy - psi * ny) * 0.5 * (r.y1 - r.y0);
+      if (bound <= 0) return bound;
+    }
+  }
   // Inlined (up to 16 copies): left to GCC, the choice flips with the size of unrelated code
   // in this file, and the call cost 13 % more instructions in the plane tests.
   auto h = [&](double x, double y) __attribute__((always_inline)) {
