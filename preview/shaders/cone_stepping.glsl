@@ -16,17 +16,27 @@ vec3 cone_texel(ivec2 p) {
 // S over the footprint and moves on to the next texel. A relaxed cone's step may cross the
 // surface, at most once: its end below the surface starts a bisection. Returns the visible
 // point's s (object length along the view ray from the base point).
-float cone_trace(vec3 dir, bool relaxed) {
+// Bent rays (bend != 0: height dir.z s + bend s^2 over a curved base, section 5.1; see
+// footprint.glsl): a step goes as far as the whole arc stays inside the cone (the first root
+// of a quadratic, exact for either sign of the curvature), so the method stays safe. A ray
+// that climbs back out of the height volume without a hit sets `escaped` (a silhouette), as
+// does one that leaves a clamped map (which returns the point where it left).
+float cone_trace(vec3 dir, bool relaxed, float bend, out bool escaped) {
+  escaped = false;
   if (!(u_stream_scale > 0.0)) return u_stream_bias / dir.z;  // a flat map: the plane h = bias
   ivec2 size = textureSize(u_cone, 0);
   vec2 n = vec2(size);
-  float s_top = (u_stream_bias + u_stream_scale) / dir.z;  // where h = bias + scale (z = 1)
+  float s_top = ray_entry(dir, bend, u_stream_bias + u_stream_scale);  // where h = bias + scale (z = 1)
   vec2 uv_top = v_uv + dir.xy * s_top;
-  // The ray o + t d, t = s - s_top, in pixel units and normalised height.
-  vec3 o = vec3(uv_top.x * n.x, (1.0 - uv_top.y) * n.y, 1.0);
-  vec3 d = vec3(dir.x * n.x, -dir.y * n.y, dir.z / u_stream_scale);
+  // The ray o.xy + t d.xy, z(t) = o.z + d.z t + e t^2, t = s - s_top, in pixel units and
+  // normalised height.
+  float e = bend / u_stream_scale;
+  float z_top = bend == 0.0 ? 1.0 : min((dir.z * s_top + bend * s_top * s_top - u_stream_bias) / u_stream_scale, 1.0);
+  vec3 o = vec3(uv_top.x * n.x, (1.0 - uv_top.y) * n.y, z_top);
+  vec3 d = vec3(dir.x * n.x, -dir.y * n.y, (dir.z + 2.0 * bend * s_top) / u_stream_scale);
   float horizontal = length(d.xy);
-  float t_floor = 1.0 / -d.z;  // z = 0, below every point of the surface
+  bool escapes;
+  float t_floor = ray_end(o, d, e, escapes);  // z = 0, below every point of the surface (or the escape)
   float t = 0.0;
   float t_out = kConeFar;  // clamp: where the ray leaves [0, W] x [0, H]
   bool clamped = u_stream_wrap == 0;
@@ -43,30 +53,49 @@ float cone_trace(vec3 dir, bool relaxed) {
         t_out = -1.0;
       }
     }
-    if (t_in > min(t_out, t_floor)) return s_top;  // never over the map above the floor
+    if (t_in > min(t_out, t_floor)) {  // never over the map above the floor
+      escaped = true;
+      return s_top;
+    }
     t = t_in;
   }
   ivec2 cell = grid_cell(o.xy + t * d.xy, d.xy);
   if (clamped) cell = clamp(cell, ivec2(0), size - 1);
   for (int i = 0; i < max(u_iterations, 1); ++i) {
-    if (clamped && (any(lessThan(cell, ivec2(0))) || any(greaterThanEqual(cell, size)))) break;  // left the map
+    if (clamped && (any(lessThan(cell, ivec2(0))) || any(greaterThanEqual(cell, size)))) {  // left the map
+      escaped = true;
+      break;
+    }
     vec3 p = o + t * d;
+    p.z += e * t * t;
     vec3 c = cone_texel(cell);
     float ratio = c.g * n.x, apex = c.b;  // ratio in texels per unit height
     float tx = d.x > 0.0 ? (float(cell.x + 1) - o.x) / d.x : (d.x < 0.0 ? (float(cell.x) - o.x) / d.x : kConeFar);
     float ty = d.y > 0.0 ? (float(cell.y + 1) - o.y) / d.y : (d.y < 0.0 ? (float(cell.y) - o.y) / d.y : kConeFar);
     float t_exit = max(min(min(tx, ty), t_floor), t);
-    float den = horizontal + ratio * -d.z;  // 0 only for a flat cone seen straight on
-    float step = p.z >= apex && den > 0.0 ? ratio * (p.z - apex) / den : 0.0;
+    float step;
+    if (e == 0.0) {
+      float den = horizontal + ratio * -d.z;  // 0 only for a flat cone seen straight on
+      step = p.z >= apex && den > 0.0 ? ratio * (p.z - apex) / den : 0.0;
+    } else {
+      // The arc stays in the cone while ratio (z(t + x) - apex) - horizontal x >= 0, a
+      // quadratic in x that is >= 0 at x = 0: step to its first root.
+      float slope = d.z + 2.0 * e * t;
+      step = p.z >= apex ? ray_first_reach(ratio * (p.z - apex), ratio * slope - horizontal, ratio * e) : 0.0;
+      // A relaxed cone admits one crossing of a descending ray only: on a convex base the
+      // arc's steps end where it stops descending, and a rising ray walks the texels exactly.
+      if (relaxed && e > 0.0) step = slope < 0.0 ? min(step, slope / (-2.0 * e)) : 0.0;
+    }
     if (t + step < t_exit || t_exit <= t) {
       // The cone does not reach beyond the footprint: intersect S over it exactly.
       float t_hit;
-      if (footprint_hit(cell, o, d, t, t_exit, t_hit)) {
+      if (footprint_hit(cell, o, d, e, t, t_exit, t_hit)) {
         t = t_hit;
         break;
       }
       if (t_exit >= t_floor) {
         t = t_floor;
+        escaped = escapes;
         break;
       }
       t = t_exit;
@@ -77,12 +106,14 @@ float cone_trace(vec3 dir, bool relaxed) {
     }
     float tq = min(t + step, min(t_floor, t_out));
     vec3 q = o + tq * d;
+    q.z += e * tq * tq;
     if (relaxed && grid_surface(q.xy) >= q.z) {
       // The step crossed the surface once (the relaxed cone's guarantee): bisect it.
       float lo = t, hi = tq;
       for (int it = 0; it < u_bisection_steps; ++it) {
         float mid = 0.5 * (lo + hi);
         vec3 r = o + mid * d;
+        r.z += e * mid * mid;
         if (grid_surface(r.xy) >= r.z) hi = mid;
         else lo = mid;
       }
@@ -90,7 +121,14 @@ float cone_trace(vec3 dir, bool relaxed) {
       break;
     }
     t = tq;
-    if (tq >= t_out) break;  // left the map (clamp)
+    if (escapes && tq >= t_floor) {  // climbed back out of the height volume
+      escaped = true;
+      break;
+    }
+    if (tq >= t_out) {  // left the map (clamp)
+      escaped = true;
+      break;
+    }
     cell = grid_cell(q.xy, d.xy);
     if (clamped) cell = clamp(cell, ivec2(0), size - 1);
   }

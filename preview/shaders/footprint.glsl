@@ -51,11 +51,54 @@ ivec2 grid_cell(vec2 p, vec2 d) {
   return c;
 }
 
-// The first intersection of the ray o + t d with S over texel `cell`'s footprint for t in
-// [t0, t1] (the ray stays over the footprint there). The lines x = i + 1/2 and y = j + 1/2
-// split the stretch into up to three pieces over each of which S is one bilinear
-// polynomial (corners on the half-texel grid), so S(ray(t)) - z(t) is a quadratic in t.
-bool footprint_hit(ivec2 cell, vec3 o, vec3 d, float t0, float t1, out float t_hit) {
+// Bent rays (silhouettes on a curved base, survey section 5.1): the ray keeps its straight
+// horizontal path o.xy + t d.xy while its height over the bent base is
+// z(t) = o.z + d.z t + e t^2 (e = 0: the straight ray; e > 0 on a convex base, which falls
+// away from the ray). Every tracer below takes e.
+//
+// The first t > 0 at which z0 + z1 t + e t^2 comes down to 0 from z0 > 0 (0 when z0 <= 0;
+// kConeFar when it never does). In the form that stays exact as e -> 0: with e = 0 it is
+// z0 / -z1, the straight ray's division.
+float ray_first_reach(float z0, float z1, float e) {
+  if (z0 <= 0.0) return 0.0;
+  if (e == 0.0) return z1 < 0.0 ? z0 / -z1 : kConeFar;
+  float disc = z1 * z1 - 4.0 * e * z0;
+  if (disc < 0.0) return kConeFar;
+  float q = -0.5 * (z1 + (z1 >= 0.0 ? 1.0 : -1.0) * sqrt(disc));  // roots q / e and z0 / q
+  float best = kConeFar;
+  float r1 = q / e;
+  if (r1 > 0.0) best = min(best, r1);
+  if (q != 0.0 && z0 / q > 0.0) best = min(best, z0 / q);
+  return best;
+}
+
+// Where a ray of height z(t) = o.z + d.z t + e t^2 ends: the first t at which it reaches the
+// floor z = 0 (below every point of the surface) or, on a convex base where it never does,
+// the t at which it climbs back out through the top z = 1 (`escapes`: it met nothing, the
+// silhouette). o.z <= 1.
+float ray_end(vec3 o, vec3 d, float e, out bool escapes) {
+  float t = ray_first_reach(o.z, d.z, e);
+  escapes = t >= kConeFar;
+  if (escapes && e > 0.0) t = (-d.z + sqrt(max(d.z * d.z - 4.0 * e * (o.z - 1.0), 0.0))) / (2.0 * e);
+  return t;
+}
+
+// Where a ray from the base point (height dir.z s + bend s^2, object units, s the length along
+// the view ray) comes down to object height h > 0 (the top of the height volume): the root
+// toward the eye, 2 h / (dir.z - sqrt(dir.z^2 + 4 bend h)), exact as bend -> 0 (h / dir.z).
+// An arc of a concave base that never rises to h starts at its highest point instead.
+float ray_entry(vec3 dir, float bend, float h) {
+  if (bend == 0.0) return h / dir.z;
+  float disc = dir.z * dir.z + 4.0 * bend * h;
+  return disc >= 0.0 ? 2.0 * h / (dir.z - sqrt(disc)) : -dir.z / (2.0 * bend);
+}
+
+// The first intersection of the ray o.xy + t d.xy, z(t) = o.z + d.z t + e t^2, with S over
+// texel `cell`'s footprint for t in [t0, t1] (the ray stays over the footprint there). The
+// lines x = i + 1/2 and y = j + 1/2 split the stretch into up to three pieces over each of
+// which S is one bilinear polynomial (corners on the half-texel grid), so S(ray(t)) - z(t) is
+// a quadratic in t, bent or not.
+bool footprint_hit(ivec2 cell, vec3 o, vec3 d, float e, float t0, float t1, out float t_hit) {
   t_hit = t1;
   // S on the footprint's half-texel grid, g[3 b + a] at (i + a/2, j + b/2), from the 3 x 3
   // texels around it, each fetched once (9 fetches, where the pieces' corners evaluated one
@@ -95,10 +138,12 @@ bool footprint_hit(ivec2 cell, vec3 o, vec3 d, float t0, float t1, out float t_h
     float pa = v10 - v00, pb = v01 - v00, pe = v00 - v10 - v01 + v11;
     // Local coordinates (s, r) in [0, 1]^2 over the piece; the parameter is tau = t - ta,
     // measured from the stretch's start to keep the coefficients small.
+    // The bent ray from ta on: z(ta + tau) = z(ta) + (d.z + 2 e ta) tau + e tau^2.
     vec3 a3 = o + ta * d;
+    a3.z += e * ta * ta;
     float s0 = 2.0 * (a3.x - pc.x), sd = 2.0 * d.x, r0 = 2.0 * (a3.y - pc.y), rd = 2.0 * d.y;
-    float A = pe * sd * rd;
-    float B = pa * sd + pb * rd + pe * (s0 * rd + r0 * sd) - d.z;
+    float A = pe * sd * rd - e;
+    float B = pa * sd + pb * rd + pe * (s0 * rd + r0 * sd) - (d.z + 2.0 * e * ta);
     float C = v00 + pa * s0 + pb * r0 + pe * s0 * r0 - a3.z;
     float L = tb - ta;
     if (C >= 0.0) {

@@ -19,15 +19,26 @@ vec2 pyramid_cell_exits(vec2 lo, vec2 size, vec3 o, vec3 d) {
 }
 
 // Returns the visible point's s (object length along the view ray from the base point).
-float pyramid_trace(vec3 dir) {
+// Bent rays (bend != 0, footprint.glsl): a box is skipped when the arc's lowest point over it
+// is above the box (the ends, or the vertex of a convex arc between them), and the descent to
+// a box's top is the arc's first reach of it: still exact. A ray that climbs back out of the
+// height volume without a hit sets `escaped` (a silhouette), as does one that leaves a
+// clamped map (which returns the point where it left).
+float pyramid_trace(vec3 dir, float bend, out bool escaped) {
+  escaped = false;
   if (!(u_stream_scale > 0.0)) return u_stream_bias / dir.z;  // a flat map: the plane h = bias
   vec2 n = vec2(textureSize(u_height, 0));
-  float s_top = (u_stream_bias + u_stream_scale) / dir.z;  // where h = bias + scale (z = 1)
+  float s_top = ray_entry(dir, bend, u_stream_bias + u_stream_scale);  // where h = bias + scale (z = 1)
   vec2 uv_top = v_uv + dir.xy * s_top;
-  // The ray o + t d, t = s - s_top, in pixel units and normalised height.
-  vec3 o = vec3(uv_top.x * n.x, (1.0 - uv_top.y) * n.y, 1.0);
-  vec3 d = vec3(dir.x * n.x, -dir.y * n.y, dir.z / u_stream_scale);
-  float t_end = 1.0 / -d.z;  // z = 0: below every point of the surface
+  // The ray o.xy + t d.xy, z(t) = o.z + d.z t + e t^2, t = s - s_top, in pixel units and
+  // normalised height.
+  float e = bend / u_stream_scale;
+  float z_top = bend == 0.0 ? 1.0 : min((dir.z * s_top + bend * s_top * s_top - u_stream_bias) / u_stream_scale, 1.0);
+  vec3 o = vec3(uv_top.x * n.x, (1.0 - uv_top.y) * n.y, z_top);
+  vec3 d = vec3(dir.x * n.x, -dir.y * n.y, (dir.z + 2.0 * bend * s_top) / u_stream_scale);
+  bool escapes;
+  float t_end = ray_end(o, d, e, escapes);  // z = 0: below every point of the surface (or the escape)
+  float t_stop = t_end;                     // t_end, or where the ray leaves a clamped map
   float t = 0.0;
   if (u_stream_wrap == 0) {
     // Clamp: the pyramid knows nothing beyond the map; start where the ray comes over it and
@@ -42,13 +53,17 @@ float pyramid_trace(vec3 dir) {
         t_out = -1.0;
       }
     }
-    if (t_in > min(t_out, t_end)) return s_top;  // never over the map above the floor
+    if (t_in > min(t_out, t_end)) {  // never over the map above the floor
+      escaped = true;
+      return s_top;
+    }
     t = t_in;
     t_end = min(t_end, t_out);
   }
   int top_level = u_pyramid_levels - 1;
   int atlas_rows = textureSize(u_pyramid, 0).y;
   int level = top_level;
+  bool hit = false;
   for (int i = 0; i < max(u_iterations, 1) && t < t_end; ++i) {
     ivec2 size = u_pyramid_size[level];
     vec2 cs = n / vec2(size);  // the level's texel in pixels
@@ -67,24 +82,39 @@ float pyramid_trace(vec3 dir) {
     // The height normalisation in the shader may round a texel one ulp over the stored maximum.
     ivec2 at = u_pyramid_offset[level] + fetch;
     float box_top = texelFetch(u_pyramid, ivec2(at.x, atlas_rows - 1 - at.y), 0).r + 1e-6;
-    if (o.z + t_exit * d.z > box_top) {
-      // The descending ray is above the box all the way across: skip it, climb a level.
+    float z_low = o.z + t_exit * d.z;  // the straight ray's lowest point over the cell: its exit
+    if (e != 0.0) {
+      float t_vertex = -d.z / (2.0 * e);  // a convex arc's lowest point, when between the ends
+      z_low = min(z_low + e * t_exit * t_exit, o.z + t * d.z + e * t * t);
+      if (e > 0.0 && t_vertex > t && t_vertex < t_exit) z_low = min(z_low, o.z + t_vertex * (d.z + e * t_vertex));
+    }
+    if (z_low > box_top) {
+      // The ray is above the box all the way across: skip it, climb a level.
       t = t_exit;
       level = min(level + 1, top_level);
       continue;
     }
-    t = max(t, (o.z - box_top) / -d.z);  // down to the box's top
+    if (e == 0.0) {
+      t = max(t, (o.z - box_top) / -d.z);  // down to the box's top
+    } else {
+      float z = o.z + t * d.z + e * t * t;
+      float reach = ray_first_reach(z - box_top, d.z + 2.0 * e * t, e);  // 0 when already inside
+      if (t + reach <= t_exit) t += reach;  // (else rounding: stay, the finer levels decide)
+    }
     if (level > 0) {
       --level;
       continue;
     }
     float t_hit;
-    if (footprint_hit(cell, o, d, t, t_exit, t_hit)) {
+    if (footprint_hit(cell, o, d, e, t, t_exit, t_hit)) {
       t = t_hit;
+      hit = true;
       break;
     }
     t = t_exit;
     level = min(level + 1, top_level);
   }
+  // No hit: the ray climbed back out (bent) or left a clamped map (which keeps that point).
+  escaped = !hit && t >= t_end && (escapes || t_end < t_stop);
   return s_top + min(t, t_end);
 }

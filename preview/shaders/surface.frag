@@ -66,6 +66,11 @@ void main() {
   vec2 uv = v_uv;
   float amortised_fetches = 0.0;  // a share of work done outside this fragment (DIG's grid pass)
   bool facing = dir.z < -1e-6;  // grazing or back-facing rays keep the base point
+  // With silhouettes on a curved base (section 5.1) the base falls away from the tangent
+  // plane by c x^2 / 2 at horizontal distance x, c the curvature along the view: the ray's
+  // height over the bent base is z(s) = dir.z s + bend s^2, bend = c sin^2(theta) / 2.
+  float bend = u_silhouettes != 0 ? 0.5 * view_curvature(view, nn) * (1.0 - dir.z * dir.z) : 0.0;
+  bool escaped = false;  // a safe method's ray left the surface without a hit
   if (u_method == kParallax && facing) {
     // Section 4.1.2: assume the height at (u, v) holds everywhere.
     uv = v_uv + height_at(v_uv) * dir.xy / dir.z;
@@ -87,12 +92,9 @@ void main() {
     // toward the eye) to h = h_min; s is object-space length along the view ray from the base
     // point. Steep parallax stops at the first sample below the surface; relief mapping
     // refines by binary search (4.4.1), POM by one secant step (4.4.2).
-    // With silhouettes on a curved base (section 5.1) the base falls away from the tangent
-    // plane by c x^2 / 2 at horizontal distance x, c the curvature along the view: the ray's
-    // height over the bent base is z(s) = dir.z s + bend s^2, bend = c sin^2(theta) / 2. The
-    // search then ends where z reaches h_min or, when it never does, where it climbs back
-    // to h_max; a ray that meets nothing there left the surface (discarded).
-    float bend = u_silhouettes != 0 ? 0.5 * view_curvature(view, nn) * (1.0 - dir.z * dir.z) : 0.0;
+    // On a curved base (`bend`, above) the search ends where the ray's height reaches h_min
+    // or, when it never does, where it climbs back to h_max; a ray that meets nothing there
+    // left the surface (discarded).
     float s_in = u_h_max / dir.z;
     float s_out = u_h_min / dir.z;
     bool escapes = false;
@@ -149,11 +151,11 @@ void main() {
     if (!found && (escapes || (u_silhouettes != 0 && bend != 0.0))) discard;  // the ray left the surface
     uv = v_uv + dir.xy * s_hit;
   } else if ((u_method == kCone || u_method == kRelaxedCone) && facing) {
-    uv = v_uv + dir.xy * cone_trace(dir, u_method == kRelaxedCone);
+    uv = v_uv + dir.xy * cone_trace(dir, u_method == kRelaxedCone, bend, escaped);
   } else if (u_method == kSphereTracing && facing) {
-    uv = v_uv + dir.xy * sphere_trace(dir);
+    uv = v_uv + dir.xy * sphere_trace(dir, bend, escaped);
   } else if (u_method == kPyramid && facing) {
-    uv = v_uv + dir.xy * pyramid_trace(dir);
+    uv = v_uv + dir.xy * pyramid_trace(dir, bend, escaped);
   } else if (u_method == kDig && u_dig_pass == 1) {
     // The grid pass: the corner ray's depth and its fetches (nothing else is drawn).
     out_color = vec4(facing ? dig_corner_depth(dir) : -1.0, float(g_fetches), 0.0, 1.0);
@@ -163,6 +165,10 @@ void main() {
   } else if (u_method == kVdm && facing) {
     if (!vdm_trace(view, tn, bn, nn, dir, uv)) discard;  // the ray left the bent height field
   }
+
+  // A safe method's ray that left the surface: climbed back out over a convex base, or left
+  // a clamped map's footprint (silhouettes).
+  if (escaped && u_silhouettes != 0) discard;
 
   // Silhouettes at the map's border: a visible point outside [0, 1]^2 of a map that does not
   // tile is off the surface's footprint.

@@ -175,8 +175,6 @@ TEST(Preview, PanSlidesTheViewAcrossTheScreen) {
   EXPECT_NEAR(std::abs(c2[1] - c0[1]), shift, 0.5);
 }
 
-// Every method, straight on and at 89.9 degrees, on a rough height field over a curved base:
-// finite pixels only, and the mesh where it should be.
 // The window's on-screen line: what it says, and that drawing it changes only the top left of
 // the frame (white glyphs on a dark band) and none of the fetch counts.
 TEST(Preview, StatusLineIsDrawnAtTheTopLeftOnly) {
@@ -215,6 +213,8 @@ TEST(Preview, StatusLineIsDrawnAtTheTopLeftOnly) {
   EXPECT_LT(lowest, 20) << "one line of text at the top";
 }
 
+// Every method, straight on and at 89.9 degrees, on a rough height field over a curved base:
+// finite pixels only, and the mesh where it should be.
 TEST(Preview, EveryMethodIsStableStraightOnAndGrazing) {
   const Mesh cylinder = test::make_parametric(32, 8, [](double s, double t) {
     const double a = 1.2 * (s - 0.5);
@@ -1259,6 +1259,60 @@ TEST(Preview, SilhouettesDiscardRaysThatLeaveTheSurface) {
   std::printf("silhouettes: flat %zu -> %zu pixels, cylinder %zu -> %zu (%zu escaped)\n", plain_on, cut_on, straight_on, bent_on, escaped);
   EXPECT_LT(bent_on, straight_on);
   EXPECT_GT(escaped, 0u) << "rays that pass under the bent surface leave it";
+}
+
+// The safe methods bend their rays on a curved base as relief mapping does (section 5.1):
+// with silhouettes on, on a convex and on a concave cylinder seen at 70 degrees, cone and
+// relaxed cone stepping, the pyramid and sphere tracing find the visible points of a dense
+// bent relief search (2048 steps), and on the convex base rays that pass under the surface
+// escape (discarded) as relief's do. Pixels whose reference point is off the map (clamp: the
+// cones know nothing beyond it) are not compared.
+TEST(Preview, SafeMethodsBendRaysOnCurvedBasesAsADenseReliefSearch) {
+  // The rough field sunk below the base (as in the silhouettes test), so that grazing rays
+  // over the convex base can pass under all of it.
+  PreviewMaps maps = cone_maps(ConeScene::rough, Border::clamp);
+  for (float& h : maps.displacement.pixels) h -= 0.06f;
+  add_cone_maps(maps, Border::clamp);
+  const HeightField field = make_height_field(maps.displacement, Border::clamp);
+  maps.sdf = distance_field_image(build_distance_field(field, DistanceFieldOptions{}), field);
+  for (const double side : {1.0, -1.0}) {  // convex (the base falls away from its normal), concave
+    const Mesh cylinder = test::make_parametric(24, 20, [side](double s, double t) {
+      const double a = 2.4 * (s - 0.5);
+      return Vec3f(float(0.5 * std::sin(a)), float(t), float(side * 0.5 * (std::cos(a) - 1.0)));
+    }, false, false);
+    PreviewOptions o = view_options("relief", 70.0f, 0.0f, 2048, PreviewShade::uv);
+    o.silhouettes = true;
+    const Image reference = render_headless(cylinder, maps, o);
+    size_t reference_on = 0;
+    for (size_t i = 0; i < reference.texel_count(); ++i) reference_on += reference.pixels[4 * i + 3] > 0.5f;
+    for (const char* method : {"cone", "relaxed-cone", "pyramid", "sphere-tracing"}) {
+      o.method = method;
+      o.iterations = 512;
+      o.silhouettes = true;
+      const Image bent = render_headless(cylinder, maps, o);
+      o.silhouettes = false;
+      const Image straight = render_headless(cylinder, maps, o);
+      size_t coverage_differs = 0, escaped = 0, moved = 0;
+      for (size_t i = 0; i < bent.texel_count(); ++i) {
+        for (int c = 0; c < 4; ++c) ASSERT_TRUE(std::isfinite(bent.pixels[4 * i + static_cast<size_t>(c)])) << method;
+        const bool on = bent.pixels[4 * i + 3] > 0.5f, reference_hit = reference.pixels[4 * i + 3] > 0.5f;
+        coverage_differs += on != reference_hit;
+        escaped += straight.pixels[4 * i + 3] > 0.5f && !on;
+        moved += on && straight.pixels[4 * i + 3] > 0.5f &&
+                 std::max(std::abs(bent.pixels[4 * i] - straight.pixels[4 * i]), std::abs(bent.pixels[4 * i + 1] - straight.pixels[4 * i + 1])) > 0.05f / 64;
+      }
+      const Agreement a = agreement(bent, reference, 2, 0.05 / 64, &reference);
+      std::printf("bent rays, %s base, %-14s: %zu of %zu pixels agree to 1/20 texel, coverage differs at %zu of %zu, %zu escaped, "
+                  "%zu moved by bending\n",
+                  side > 0 ? "convex" : "concave", method, a.within, a.pixels, coverage_differs, reference_on, escaped, moved);
+      EXPECT_GT(moved, reference_on / 40) << method << ": the bending is seen";
+      EXPECT_GE(a.fraction(), 0.99) << method;
+      EXPECT_LE(coverage_differs, reference_on / 200) << method;
+      if (side > 0) {
+        EXPECT_GT(escaped, 0u) << method << ": rays that pass under the bent surface leave it";
+      }
+    }
+  }
 }
 
 // ---- vdm and dstream (issue 8) ----
