@@ -93,6 +93,28 @@ float ray_entry(vec3 dir, float bend, float h) {
   return disc >= 0.0 ? 2.0 * h / (dir.z - sqrt(disc)) : -dir.z / (2.0 * bend);
 }
 
+// The stretch of a view ray (height dir.z s + bend s^2 over the base, object units) inside the
+// displacement slab [u_h_min, u_h_max]: from s_in, where it comes down to h_max (on a concave
+// base whose arc never rises that high, its highest point), to s_out, where it reaches h_min
+// or, on a convex base where it never does, climbs back to h_max (`escapes`). The linear
+// searches (steep, relief, POM, DIG-DM) march along it.
+void ray_slab(vec3 dir, float bend, out float s_in, out float s_out, out bool escapes) {
+  s_in = u_h_max / dir.z;
+  s_out = u_h_min / dir.z;
+  escapes = false;
+  if (bend == 0.0) return;
+  float disc_in = dir.z * dir.z + 4.0 * bend * u_h_max;
+  s_in = ray_entry(dir, bend, u_h_max);
+  float disc = dir.z * dir.z + 4.0 * bend * u_h_min;
+  if (disc >= 0.0) {
+    s_out = 2.0 * u_h_min / (dir.z - sqrt(disc));
+  } else {
+    // Convex base: the ray never gets down to h_min; it leaves through the top again.
+    s_out = (-dir.z + sqrt(max(disc_in, 0.0))) / (2.0 * bend);
+    escapes = true;
+  }
+}
+
 // The first intersection of the ray o.xy + t d.xy, z(t) = o.z + d.z t + e t^2, with S over
 // texel `cell`'s footprint for t in [t0, t1] (the ray stays over the footprint there). The
 // lines x = i + 1/2 and y = j + 1/2 split the stretch into up to three pieces over each of

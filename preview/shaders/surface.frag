@@ -95,24 +95,9 @@ void main() {
     // On a curved base (`bend`, above) the search ends where the ray's height reaches h_min
     // or, when it never does, where it climbs back to h_max; a ray that meets nothing there
     // left the surface (discarded).
-    float s_in = u_h_max / dir.z;
-    float s_out = u_h_min / dir.z;
-    bool escapes = false;
-    if (bend != 0.0) {
-      // z(s) = h at the root nearest the straight ray's h / dir.z, in the form that stays
-      // exact as bend -> 0: s = 2 h / (dir.z - sqrt(dir.z^2 + 4 bend h)).
-      float disc_in = dir.z * dir.z + 4.0 * bend * u_h_max;
-      // A concave base whose arc never rises to h_max: start at its top.
-      s_in = disc_in >= 0.0 ? 2.0 * u_h_max / (dir.z - sqrt(disc_in)) : -dir.z / (2.0 * bend);
-      float disc = dir.z * dir.z + 4.0 * bend * u_h_min;
-      if (disc >= 0.0) {
-        s_out = 2.0 * u_h_min / (dir.z - sqrt(disc));
-      } else {
-        // Convex base: the ray never gets down to h_min; it leaves through the top again.
-        s_out = (-dir.z + sqrt(max(disc_in, 0.0))) / (2.0 * bend);
-        escapes = true;
-      }
-    }
+    float s_in, s_out;
+    bool escapes;
+    ray_slab(dir, bend, s_in, s_out, escapes);
     // POM adapts its step count to the view (section 4.4.2); steep and relief take the budget.
     int steps = u_method == kPom ? view_adapted_steps(u_iterations, dir) : max(u_iterations, 1);
     float s_prev = s_in;
