@@ -23,7 +23,11 @@ vec3 cone_texel(ivec2 p) {
 // does one that leaves a clamped map (which returns the point where it left).
 float cone_trace(vec3 dir, bool relaxed, float bend, out bool escaped) {
   escaped = false;
-  if (!(u_stream_scale > 0.0)) return u_stream_bias / dir.z;  // a flat map: the plane h = bias
+  if (!(u_stream_scale > 0.0) || !ray_enters(dir, bend, u_stream_bias + u_stream_scale)) {
+    // A flat map (the plane h = bias), or a bent ray that passes over the whole volume.
+    escaped = !ray_enters(dir, bend, u_stream_bias);
+    return ray_entry(dir, bend, u_stream_bias);
+  }
   ivec2 size = textureSize(u_cone, 0);
   vec2 n = vec2(size);
   float s_top = ray_entry(dir, bend, u_stream_bias + u_stream_scale);  // where h = bias + scale (z = 1)

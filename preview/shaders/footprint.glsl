@@ -83,10 +83,16 @@ float ray_end(vec3 o, vec3 d, float e, out bool escapes) {
   return t;
 }
 
-// Where a ray from the base point (height dir.z s + bend s^2, object units, s the length along
-// the view ray) comes down to object height h > 0 (the top of the height volume): the root
-// toward the eye, 2 h / (dir.z - sqrt(dir.z^2 + 4 bend h)), exact as bend -> 0 (h / dir.z).
-// An arc of a concave base that never rises to h starts at its highest point instead.
+// Whether a ray from the base point (height dir.z s + bend s^2, object units, s the length
+// along the view ray) ever comes down to object height h: an arc over a convex base may stay
+// above it (then it meets nothing below h: a silhouette).
+bool ray_enters(vec3 dir, float bend, float h) { return bend <= 0.0 || dir.z * dir.z + 4.0 * bend * h >= 0.0; }
+
+// Where that ray comes down to object height h (the top of the height volume, or a flat map's
+// plane): the root toward the eye, 2 h / (dir.z - sqrt(dir.z^2 + 4 bend h)), exact as
+// bend -> 0 (h / dir.z). An arc of a concave base that never rises to h is below it
+// everywhere: it starts at its highest point instead. (Convex arcs that never come down to h:
+// ray_enters is false, and the value is the arc's lowest point.)
 float ray_entry(vec3 dir, float bend, float h) {
   if (bend == 0.0) return h / dir.z;
   float disc = dir.z * dir.z + 4.0 * bend * h;

@@ -26,7 +26,11 @@ vec2 pyramid_cell_exits(vec2 lo, vec2 size, vec3 o, vec3 d) {
 // clamped map (which returns the point where it left).
 float pyramid_trace(vec3 dir, float bend, out bool escaped) {
   escaped = false;
-  if (!(u_stream_scale > 0.0)) return u_stream_bias / dir.z;  // a flat map: the plane h = bias
+  if (!(u_stream_scale > 0.0) || !ray_enters(dir, bend, u_stream_bias + u_stream_scale)) {
+    // A flat map (the plane h = bias), or a bent ray that passes over the whole volume.
+    escaped = !ray_enters(dir, bend, u_stream_bias);
+    return ray_entry(dir, bend, u_stream_bias);
+  }
   vec2 n = vec2(textureSize(u_height, 0));
   float s_top = ray_entry(dir, bend, u_stream_bias + u_stream_scale);  // where h = bias + scale (z = 1)
   vec2 uv_top = v_uv + dir.xy * s_top;

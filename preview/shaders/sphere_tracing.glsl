@@ -7,7 +7,11 @@
 // the height volume without a hit sets `escaped` (a silhouette).
 float sphere_trace(vec3 dir, float bend, out bool escaped) {
   escaped = false;
-  if (!(u_sdf_scale > 0.0)) return u_sdf_bias / dir.z;  // a flat map: the plane h = bias
+  if (!(u_sdf_scale > 0.0) || !ray_enters(dir, bend, u_sdf_bias + u_sdf_scale)) {
+    // A flat map (the plane h = bias), or a bent ray that passes over the whole volume.
+    escaped = !ray_enters(dir, bend, u_sdf_bias);
+    return ray_entry(dir, bend, u_sdf_bias);
+  }
   // Section 4.3.4 on meso's distance field (streams/distance_field.hpp): in its space the
   // point is (u, v H/W, normalised height * relief), distances in units of u. March from the
   // top of the box by the stored distance until it vanishes.

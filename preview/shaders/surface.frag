@@ -152,7 +152,11 @@ void main() {
   }
 
   // A safe method's ray that left the surface: climbed back out over a convex base, or left
-  // a clamped map's footprint (silhouettes).
+  // a clamped map's footprint (silhouettes). The cones and the pyramid know nothing beyond a
+  // clamped map and return the point where the ray left it, on the border, which the rule
+  // below would keep; the linear searches go on over the clamped surface to a point off the
+  // map, which it discards: so both discard such rays, straight or bent. (Sphere tracing's
+  // field covers the clamped surface, and its point off the map is discarded below.)
   if (escaped && u_silhouettes != 0) discard;
 
   // Silhouettes at the map's border: a visible point outside [0, 1]^2 of a map that does not

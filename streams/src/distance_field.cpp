@@ -23,6 +23,7 @@ DistanceField build_distance_field(const HeightField& field, const DistanceField
   // Left unwritten here (LargeVector): pass 2 writes every voxel, each slice's pages first
   // touched by the thread that fills them.
   df.distance.resize(static_cast<size_t>(w) * static_cast<size_t>(h) * static_cast<size_t>(d));
+  if (w <= 0 || h <= 0) return df;  // nothing to transform (and no edge or row to index)
 
   // Box heights: the maximum of the filtered surface over each texel footprint.
   const Image top = footprint_min_max(field);
