@@ -24,8 +24,32 @@ const int kDigBlock = 4;
 // 1.3 % at 16 steps for +0.5 fetches per pixel.
 uniform float u_dig_epsilon;
 
+// The view ray's descent through the slab; `bend` bends it over a curved base (silhouettes,
+// section 5.1; ray_slab in footprint.glsl). The normalised depth z of a point is its fraction
+// of the descent: 1 where the ray comes in at h_max, 0 where it reaches h_min or, on a convex
+// base where it never does, at its lowest point (the two cases meet there, so neighbouring
+// rays' depths stay comparable, which the grid's intervals need). Such a ray's rising stretch
+// after its lowest point, up to where it leaves the slab (s_exit), is searched after the
+// descent by the pixel pass, as relief mapping searches it.
+struct DigRay {
+  vec3 dir;
+  float bend, s_in, s_out, s_exit;
+  bool escapes;
+};
+DigRay dig_ray(vec3 dir, float bend) {
+  DigRay r;
+  r.dir = dir;
+  r.bend = bend;
+  ray_slab(dir, bend, r.s_in, r.s_exit, r.escapes);
+  r.s_out = r.escapes ? -dir.z / (2.0 * bend) : r.s_exit;
+  return r;
+}
+
 // Object length s along the view ray at which it has normalised depth z.
-float dig_s(vec3 dir, float z) { return mix(u_h_min, u_h_max, z) / dir.z; }
+float dig_s(DigRay r, float z) { return r.bend == 0.0 ? mix(u_h_min, u_h_max, z) / r.dir.z : mix(r.s_out, r.s_in, z); }
+
+// The ray's height minus the surface's at s.
+float dig_gap(DigRay r, float s) { return r.dir.z * s + r.bend * s * s - height_at(v_uv + r.dir.xy * s); }
 
 // Linear-search steps over the whole slab, both passes: view_adapted_steps of the budget. A
 // corner ray and the pixel rays of its block look almost the same way, so their counts differ
@@ -34,13 +58,13 @@ int dig_steps(vec3 dir) { return view_adapted_steps(u_iterations, dir); }
 
 // Pass 1: the steep-parallax linear search (4.3.1) over the whole slab; the normalised depth
 // of the last sample above the surface (1 when the first is already below).
-float dig_corner_depth(vec3 dir) {
+float dig_corner_depth(vec3 dir, float bend) {
+  DigRay r = dig_ray(dir, bend);
   int steps = dig_steps(dir);
   float z_above = 1.0;
   for (int i = 0; i <= steps; ++i) {
     float z = 1.0 - float(i) / float(steps);
-    float s = dig_s(dir, z);
-    if (dir.z * s - height_at(v_uv + dir.xy * s) <= 0.0) break;
+    if (dig_gap(r, dig_s(r, z)) <= 0.0) break;
     z_above = z;
   }
   return z_above;
@@ -48,7 +72,9 @@ float dig_corner_depth(vec3 dir) {
 
 // Pass 2: the visible point's s. `amortised` receives this pixel's share of pass 1's fetches
 // (the block's corner ray over the block's 16 pixels).
-float dig_trace(vec3 dir, out float amortised) {
+float dig_trace(vec3 dir, float bend, out float amortised, out bool escaped) {
+  DigRay r = dig_ray(dir, bend);
+  escaped = false;
   ivec2 block = ivec2(gl_FragCoord.xy) / kDigBlock;
   float lo = 2.0, hi = -2.0;
   bool known = true;
@@ -67,16 +93,16 @@ float dig_trace(vec3 dir, out float amortised) {
   // Silhouette blocks (a corner off the mesh) search the whole slab.
   float top = known ? min(1.0, hi + max(corner_step, u_dig_epsilon)) : 1.0;
   float bottom = known ? max(0.0, lo - corner_step) : 0.0;
-  float s_prev = dig_s(dir, top);
-  float d_prev = dir.z * s_prev - height_at(v_uv + dir.xy * s_prev);  // ray height minus surface height
+  float s_prev = dig_s(r, top);
+  float d_prev = dig_gap(r, s_prev);  // ray height minus surface height
   if (d_prev <= 0.0) return s_prev;
   // Fixed step height through the interval; if the crossing is not in it (the grid's
   // approximation failed), on to the slab's bottom, so a pixel is never left without a hit.
   int n = int(ceil((top - bottom) / step - 1e-4)) + int(ceil(bottom / step - 1e-4));
   for (int i = 1; i <= n; ++i) {
     float z = max(top - float(i) * step, 0.0);
-    float s = dig_s(dir, z);
-    float d = dir.z * s - height_at(v_uv + dir.xy * s);
+    float s = dig_s(r, z);
+    float d = dig_gap(r, s);
     if (d <= 0.0) {
       // The confined search is "any regular per-pixel algorithm" (paper, section 3); this
       // one refines as POM does, by one secant step between the last two samples (survey
@@ -87,5 +113,22 @@ float dig_trace(vec3 dir, out float amortised) {
     s_prev = s;
     d_prev = d;
   }
-  return dig_s(dir, 0.0);
+  if (r.escapes) {
+    // Past its lowest point the bent ray rises back through the slab: on with the same step
+    // along the ray until it leaves (a ray that meets nothing there escapes: a silhouette).
+    float ds = (r.s_out - r.s_in) * step;
+    int rising = ds > 0.0 ? int(ceil((r.s_exit - r.s_out) / ds)) : 0;
+    for (int i = 1; i <= rising; ++i) {
+      float s = min(r.s_out + float(i) * ds, r.s_exit);
+      float d = dig_gap(r, s);
+      if (d <= 0.0) {
+        float w = d_prev / max(d_prev - d, 1e-20);
+        return mix(s_prev, s, clamp(w, 0.0, 1.0));
+      }
+      s_prev = s;
+      d_prev = d;
+    }
+    escaped = true;
+  }
+  return dig_s(r, 0.0);
 }

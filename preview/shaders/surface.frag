@@ -143,10 +143,10 @@ void main() {
     uv = v_uv + dir.xy * pyramid_trace(dir, bend, escaped);
   } else if (u_method == kDig && u_dig_pass == 1) {
     // The grid pass: the corner ray's depth and its fetches (nothing else is drawn).
-    out_color = vec4(facing ? dig_corner_depth(dir) : -1.0, float(g_fetches), 0.0, 1.0);
+    out_color = vec4(facing ? dig_corner_depth(dir, bend) : -1.0, float(g_fetches), 0.0, 1.0);
     return;
   } else if (u_method == kDig && facing) {
-    uv = v_uv + dir.xy * dig_trace(dir, amortised_fetches);
+    uv = v_uv + dir.xy * dig_trace(dir, bend, amortised_fetches, escaped);
   } else if (u_method == kVdm && facing) {
     if (!vdm_trace(view, tn, bn, nn, dir, uv)) discard;  // the ray left the bent height field
   }

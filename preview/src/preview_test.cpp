@@ -1261,13 +1261,14 @@ TEST(Preview, SilhouettesDiscardRaysThatLeaveTheSurface) {
   EXPECT_GT(escaped, 0u) << "rays that pass under the bent surface leave it";
 }
 
-// The safe methods bend their rays on a curved base as relief mapping does (section 5.1):
-// with silhouettes on, on a convex and on a concave cylinder seen at 70 degrees, cone and
-// relaxed cone stepping, the pyramid and sphere tracing find the visible points of a dense
-// bent relief search (2048 steps), and on the convex base rays that pass under the surface
-// escape (discarded) as relief's do. Pixels whose reference point is off the map (clamp: the
+// The safe methods and DIG-DM bend their rays on a curved base as relief mapping does
+// (section 5.1): with silhouettes on, on a convex and on a concave cylinder seen at 70
+// degrees, cone and relaxed cone stepping, the pyramid, sphere tracing and DIG-DM (at this
+// budget; it is not a safe method) find the visible points of a dense bent relief search
+// (2048 steps), and on the convex base rays that pass under the surface escape (discarded)
+// as relief's do. Pixels whose reference point is off the map (clamp: the
 // cones know nothing beyond it) are not compared.
-TEST(Preview, SafeMethodsBendRaysOnCurvedBasesAsADenseReliefSearch) {
+TEST(Preview, SafeMethodsAndDigBendRaysOnCurvedBasesAsADenseReliefSearch) {
   // The rough field sunk below the base (as in the silhouettes test), so that grazing rays
   // over the convex base can pass under all of it.
   PreviewMaps maps = cone_maps(ConeScene::rough, Border::clamp);
@@ -1285,7 +1286,7 @@ TEST(Preview, SafeMethodsBendRaysOnCurvedBasesAsADenseReliefSearch) {
     const Image reference = render_headless(cylinder, maps, o);
     size_t reference_on = 0;
     for (size_t i = 0; i < reference.texel_count(); ++i) reference_on += reference.pixels[4 * i + 3] > 0.5f;
-    for (const char* method : {"cone", "relaxed-cone", "pyramid", "sphere-tracing"}) {
+    for (const char* method : {"cone", "relaxed-cone", "pyramid", "sphere-tracing", "dig"}) {
       o.method = method;
       o.iterations = 512;
       o.silhouettes = true;
