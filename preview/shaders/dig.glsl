@@ -99,9 +99,13 @@ float dig_trace(vec3 dir, float bend, out float amortised, out bool escaped) {
   // Fixed step height through the interval; if the crossing is not in it (the grid's
   // approximation failed), on to the slab's bottom, so a pixel is never left without a hit.
   int n = int(ceil((top - bottom) / step - 1e-4)) + int(ceil(bottom / step - 1e-4));
-  for (int i = 1; i <= n; ++i) {
-    float z = max(top - float(i) * step, 0.0);
-    float s = dig_s(r, z);
+  // A bent ray that never reaches h_min rises back through the slab past its lowest point:
+  // then on with the same step along the ray until it leaves (meeting nothing there, it
+  // escapes: a silhouette).
+  float ds = (r.s_out - r.s_in) * step;
+  int rising = r.escapes && ds > 0.0 ? int(ceil((r.s_exit - r.s_out) / ds)) : 0;
+  for (int i = 1; i <= n + rising; ++i) {
+    float s = i <= n ? dig_s(r, max(top - float(i) * step, 0.0)) : min(r.s_out + float(i - n) * ds, r.s_exit);
     float d = dig_gap(r, s);
     if (d <= 0.0) {
       // The confined search is "any regular per-pixel algorithm" (paper, section 3); this
@@ -113,22 +117,6 @@ float dig_trace(vec3 dir, float bend, out float amortised, out bool escaped) {
     s_prev = s;
     d_prev = d;
   }
-  if (r.escapes) {
-    // Past its lowest point the bent ray rises back through the slab: on with the same step
-    // along the ray until it leaves (a ray that meets nothing there escapes: a silhouette).
-    float ds = (r.s_out - r.s_in) * step;
-    int rising = ds > 0.0 ? int(ceil((r.s_exit - r.s_out) / ds)) : 0;
-    for (int i = 1; i <= rising; ++i) {
-      float s = min(r.s_out + float(i) * ds, r.s_exit);
-      float d = dig_gap(r, s);
-      if (d <= 0.0) {
-        float w = d_prev / max(d_prev - d, 1e-20);
-        return mix(s_prev, s, clamp(w, 0.0, 1.0));
-      }
-      s_prev = s;
-      d_prev = d;
-    }
-    escaped = true;
-  }
+  escaped = r.escapes;
   return dig_s(r, 0.0);
 }
