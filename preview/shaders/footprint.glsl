@@ -99,6 +99,21 @@ float ray_entry(vec3 dir, float bend, float h) {
   return disc >= 0.0 ? 2.0 * h / (dir.z - sqrt(disc)) : -dir.z / (2.0 * bend);
 }
 
+// The view ray in the streams' pixel units from where it enters the height volume (z = 1, or
+// a concave arc's highest point): o.xy + t d.xy, z(t) = o.z + d.z t + e t^2, t = s - s_top
+// (returned). The cone and pyramid tracers start from it; call only when the stream is not
+// flat and ray_enters the volume's top.
+float stream_ray(vec3 dir, float bend, out vec3 o, out vec3 d, out float e) {
+  vec2 n = vec2(textureSize(u_height, 0));  // every stream has the height map's size
+  float s_top = ray_entry(dir, bend, u_stream_bias + u_stream_scale);
+  vec2 uv_top = v_uv + dir.xy * s_top;
+  e = bend / u_stream_scale;
+  float z_top = bend == 0.0 ? 1.0 : min((dir.z * s_top + bend * s_top * s_top - u_stream_bias) / u_stream_scale, 1.0);
+  o = vec3(uv_top.x * n.x, (1.0 - uv_top.y) * n.y, z_top);
+  d = vec3(dir.x * n.x, -dir.y * n.y, (dir.z + 2.0 * bend * s_top) / u_stream_scale);
+  return s_top;
+}
+
 // The stretch of a view ray (height dir.z s + bend s^2 over the base, object units) inside the
 // displacement slab [u_h_min, u_h_max]: from s_in, where it comes down to h_max (on a concave
 // base whose arc never rises that high, its highest point), to s_out, where it reaches h_min

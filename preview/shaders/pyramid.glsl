@@ -32,14 +32,10 @@ float pyramid_trace(vec3 dir, float bend, out bool escaped) {
     return ray_entry(dir, bend, u_stream_bias);
   }
   vec2 n = vec2(textureSize(u_height, 0));
-  float s_top = ray_entry(dir, bend, u_stream_bias + u_stream_scale);  // where h = bias + scale (z = 1)
-  vec2 uv_top = v_uv + dir.xy * s_top;
-  // The ray o.xy + t d.xy, z(t) = o.z + d.z t + e t^2, t = s - s_top, in pixel units and
-  // normalised height.
-  float e = bend / u_stream_scale;
-  float z_top = bend == 0.0 ? 1.0 : min((dir.z * s_top + bend * s_top * s_top - u_stream_bias) / u_stream_scale, 1.0);
-  vec3 o = vec3(uv_top.x * n.x, (1.0 - uv_top.y) * n.y, z_top);
-  vec3 d = vec3(dir.x * n.x, -dir.y * n.y, (dir.z + 2.0 * bend * s_top) / u_stream_scale);
+  // The ray o.xy + t d.xy, z(t) = o.z + d.z t + e t^2, t = s - s_top (footprint.glsl).
+  vec3 o, d;
+  float e;
+  float s_top = stream_ray(dir, bend, o, d, e);
   bool escapes;
   float t_end = ray_end(o, d, e, escapes);  // z = 0: below every point of the surface (or the escape)
   float t_stop = t_end;                     // t_end, or where the ray leaves a clamped map
