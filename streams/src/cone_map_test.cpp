@@ -30,14 +30,15 @@ struct BruteCase {
 class ConeBruteForce : public ::testing::TestWithParam<std::tuple<BruteCase, ConeKind>> {};
 
 // Every stored cone is safe against the sampled surface (it can only be narrower than the
-// brute force, never wider) and, for conservative cones, equal to it within 1e-3: the
-// sampled supremum misses the true one only between samples.
+// brute force, never wider) and equal to it within 5e-4: the tolerance (1e-4) plus what the
+// refined brute force still misses of the supremum. Relaxed cones too: where the apex T sits
+// on F's boundary and the descending set fans out of that point, their supremum is a limit,
+// taken in closed form (before it was, a bound 28 % narrower was kept on the bumps).
 TEST_P(ConeBruteForce, SafeAndTightAgainstTheDefinition) {
   const auto& [c, kind] = GetParam();
   const HeightField f = c.make();
   const Image cone = build_cone_map(f, {kind, 1e-4, false});
   double worst_gap = 0;
-  std::vector<double> gaps = {0};
   for (int j = 0; j < f.height.height; ++j)
     for (int i = 0; i < f.height.width; ++i) {
       const double top = cone.at(i, j, 2);
@@ -50,17 +51,8 @@ TEST_P(ConeBruteForce, SafeAndTightAgainstTheDefinition) {
       const double brute = std::min(1.0 / psi, static_cast<double>(kConeRatioCap) * f.height.width);
       ASSERT_LE(stored, brute * (1 + 1e-6)) << c.name << " texel " << i << "," << j << ": wider than the surface allows";
       worst_gap = std::max(worst_gap, 1 - stored / brute);
-      gaps.push_back(1 - stored / brute);
     }
-  std::sort(gaps.begin(), gaps.end());
-  if (kind == ConeKind::conservative) {
-    EXPECT_LT(worst_gap, 1e-3) << c.name;
-  } else {
-    // Relaxed: where the apex T sits on F's boundary, the set of descending points fans out
-    // of that point and the bound is kept (safe); measured here, typical gaps are nil.
-    EXPECT_LT(gaps[gaps.size() / 2], 1e-3) << c.name;
-    EXPECT_LT(worst_gap, 0.35) << c.name;
-  }
+  EXPECT_LT(worst_gap, 5e-4) << c.name;
 }
 
 INSTANTIATE_TEST_SUITE_P(
