@@ -2,6 +2,7 @@
 // (valgrind --tool=callgrind) and for checking that outputs stay byte-identical:
 //   cone_time MAP SIZE RELAXED [THREADS [OUT.raw [TOLERANCE]]]
 // MAP: 0 = the example's bricks, 1 = uniform noise, 2 = smooth bumps (as bench/stages_bench.cpp).
+// RELAXED: 0 conservative, 1 relaxed, 2 relaxed with ConeMapOptions::exact_fans false.
 // OUT.raw receives the cone map's float pixels as they are in memory ("-": none); TOLERANCE
 // is ConeMapOptions::tolerance.
 #include "meso/streams/cone_map.hpp"
@@ -28,11 +29,12 @@ int main(int argc, char** argv) {
   const HeightField f = bench::bench_height_field(static_cast<bench::BenchMap>(kind), n);
   ConeMapOptions o;
   o.kind = relaxed ? ConeKind::relaxed : ConeKind::conservative;
+  o.exact_fans = std::atoi(argv[3]) != 2;
   if (argc > 6) o.tolerance = std::atof(argv[6]);
   const auto start = std::chrono::steady_clock::now();
   const Image cone = build_cone_map(f, o);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::printf("map %d %dx%d %s: %.3f s\n", kind, n, n, relaxed ? "relaxed" : "conservative", seconds);
+  std::printf("map %d %dx%d %s: %.3f s\n", kind, n, n, relaxed ? (o.exact_fans ? "relaxed" : "relaxed, fans bound") : "conservative", seconds);
   if (argc > 5 && std::string(argv[5]) != "-") {
     std::FILE* out = std::fopen(argv[5], "wb");
     if (out == nullptr) return 3;

@@ -120,6 +120,7 @@ void add_streams(CLI::App& app, Context& ctx) {
     const bool relaxed = kind == ConeKind::relaxed;
     auto cone_args = std::make_shared<StreamArgs>();
     auto tolerance = std::make_shared<double>(1e-4);
+    auto fans = std::make_shared<std::string>("exact");
     CLI::App* cone = add_stream_subcommand(
         streams, relaxed ? "relaxed-cone" : "cone",
         relaxed ? "Relaxed cone map (Policarpo & Oliveira), exact for the bilinear surface: a ray to the cone's boundary crosses it at most once"
@@ -128,13 +129,20 @@ void add_streams(CLI::App& app, Context& ctx) {
     cone->add_option("--tolerance", *tolerance, "Relative gap allowed below the exact ratio (the stored one is never wider)")
         ->check(CLI::Range(1e-6, 0.5))
         ->capture_default_str();
-    cone->callback([&ctx, cone_args, tolerance, kind] {
-      ctx.run = [&ctx, cone_args, tolerance, kind](nlohmann::json& report, Progress&) {
+    if (relaxed)
+      cone->add_option("--fans", *fans,
+                       "Where the apex sits on the footprint's side: exact (the widest cone) or bound (a safe, narrower one; much faster on smooth "
+                       "maps with features hundreds of texels wide)")
+          ->check(CLI::IsMember({"exact", "bound"}))
+          ->capture_default_str();
+    cone->callback([&ctx, cone_args, tolerance, fans, kind] {
+      ctx.run = [&ctx, cone_args, tolerance, fans, kind](nlohmann::json& report, Progress&) {
         const HeightField field = load_height_field(*cone_args);
         ConeMapOptions options;
         options.kind = kind;
         options.tolerance = *tolerance;
         options.half = cone_args->half;
+        options.exact_fans = *fans == "exact";
         const std::vector<Image> levels = cone_map_levels(build_cone_map(field, options));
         OutputSet outputs;
         write_image_levels(levels, outputs.add(cone_args->output), cone_args->half ? PixelFormat::half : PixelFormat::float32);
@@ -160,6 +168,7 @@ void add_streams(CLI::App& app, Context& ctx) {
                   {"bias", field.bias},
                   {"border", border_name(field.border)},
                   {"tolerance", *tolerance},
+                  {"fans", kind == ConeKind::relaxed ? nlohmann::json(*fans) : nlohmann::json(nullptr)},
                   {"min_ratio", lo},
                   {"unbounded_texels", capped},
                   {"bytes", texels * 3 * (cone_args->half ? 2 : 4)}};

@@ -126,8 +126,8 @@ double rect_distance(const Rect& r, const Rect& f) {
 // bound already conceded are then left alone instead of refined to the depth cap.
 class ConeSearch {
  public:
-  ConeSearch(const Rect& footprint, double top, bool relaxed, double tolerance)
-      : f_(footprint), top_(top), relaxed_(relaxed), tol_(tolerance), max_depth_(relaxed ? kMaxDepthRelaxed : kMaxDepth) {}
+  ConeSearch(const Rect& footprint, double top, bool relaxed, double tolerance, bool exact_fans = true)
+      : f_(footprint), top_(top), relaxed_(relaxed), tol_(tolerance), max_depth_(relaxed ? kMaxDepthRelaxed : kMaxDepth), fans_(exact_fans) {}
 
   double psi = 0;
   double bound = 0;
@@ -718,7 +718,7 @@ class ConeSearch {
   // it vanishes at an end with S < T there, or where the arc is a point.
   bool side_arc(const Piece& p, const Bilinear& f, const std::array<double, 4>& e) {
     const bool on_f0 = !(piece_distance(p.x(e[0]), p.y(e[1])) > 0), on_f1 = !(piece_distance(p.x(e[2]), p.y(e[3])) > 0);
-    if (on_f0 && on_f1) return false;
+    if ((on_f0 && on_f1) || ((on_f0 || on_f1) && !fans_)) return false;  // ConeMapOptions::exact_fans
     // An end on F's edge is taken only where S = T there (the fan): elsewhere S < T near it,
     // psi tends to -inf, and the boxes close.
     if ((on_f0 && p.value(e[0], e[1]) != top_) || (on_f1 && p.value(e[2], e[3]) != top_)) return false;
@@ -903,6 +903,7 @@ class ConeSearch {
   bool relaxed_;
   double tol_;
   int max_depth_;
+  bool fans_;  // relaxed: a fan's limit taken exactly (ConeMapOptions::exact_fans)
   int zx_ = 0, zy_ = 0;
   double cx_ = 0, cy_ = 0, sc_ = 0, tc_ = 0;
   bool touches_ = false, boundary_max_ = false;
@@ -1379,8 +1380,8 @@ class BlockSearch {
  public:
   using PerTexel = std::array<double, kBlock * kBlock>;
 
-  BlockSearch(const MaxTree& tree, const HalfGrid& grid, int w, int h, bool wrap, double tolerance)
-      : tree_(tree), grid_(grid), w_(w), h_(h), wrap_(wrap), tol_(tolerance), root_(static_cast<int>(tree.level.size()) - 1),
+  BlockSearch(const MaxTree& tree, const HalfGrid& grid, int w, int h, bool wrap, double tolerance, bool exact_fans)
+      : tree_(tree), grid_(grid), w_(w), h_(h), wrap_(wrap), tol_(tolerance), fans_(exact_fans), root_(static_cast<int>(tree.level.size()) - 1),
         global_max_(tree.at(root_, 0, 0)), leaves_(grid) {}
 
   // Searches the texels of `todo` in block b (apex heights `top`), of one kind, each seeded
@@ -1392,7 +1393,7 @@ class BlockSearch {
     for (int k = 0; k < kBlock * kBlock; ++k) {
       const int i = b.i0 + (k & (kBlock - 1)), j = b.j0 + (k >> kBlockLog);
       footprint_[static_cast<size_t>(k)] = Rect{static_cast<double>(i), static_cast<double>(j), i + 1.0, j + 1.0};
-      s.emplace_back(footprint_[static_cast<size_t>(k)], top[static_cast<size_t>(k)], relaxed, tol_);
+      s.emplace_back(footprint_[static_cast<size_t>(k)], top[static_cast<size_t>(k)], relaxed, tol_, fans_);
     }
     relaxed_ = relaxed;
     live_ = 0;
@@ -1694,6 +1695,7 @@ class BlockSearch {
   int w_, h_;
   bool wrap_;
   double tol_;
+  bool fans_;
   int root_;
   double global_max_;
   LeafCache leaves_;
@@ -1743,7 +1745,7 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
   // points of the block before it (seeds chain along a row of blocks only, so results never
   // depend on how rows are split among threads).
   tbb::parallel_for(tbb::blocked_range<int>(0, blocks_y), [&](const tbb::blocked_range<int>& rows) {
-    BlockSearch walk(tree, g, w, h, field.border == Border::wrap, o.tolerance);
+    BlockSearch walk(tree, g, w, h, field.border == Border::wrap, o.tolerance, o.exact_fans);
     std::vector<ConeSearch> searches, fallback;
     std::vector<ConeSearch::Point> seeds_conservative, seeds_relaxed, seeds;
     for (int bj = rows.begin(); bj < rows.end(); ++bj) {
@@ -1816,6 +1818,7 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
   out.metadata["texels_per_u"] = w;
   out.metadata["ratio_cap"] = kConeRatioCap;
   out.metadata["tolerance"] = static_cast<float>(o.tolerance);
+  if (relaxed) out.metadata["fans"] = std::string(o.exact_fans ? "exact" : "bound");
   return out;
 }
 

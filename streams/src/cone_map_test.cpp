@@ -92,6 +92,32 @@ TEST(ConeMap, SpikeGivesTheDistanceToThePeak) {
   EXPECT_EQ(cone.at(6, 5, 2), 0.5f) << "apex: the shared edge's midpoint";
 }
 
+// exact_fans = false keeps a bound where the descending set fans out of the apex: safe
+// against the same refined brute force, never wider than the exact cones, and narrower on
+// the bumps, where fans are most texels' limit (a test that could not tell the modes apart
+// would pass for either).
+TEST(ConeMap, FansBoundIsSafeAndNoWiderThanExact) {
+  const HeightField f = bumps(16, 16, Border::clamp);
+  const Image exact = build_cone_map(f, {ConeKind::relaxed, 1e-4, false});
+  ConeMapOptions o{ConeKind::relaxed, 1e-4, false};
+  o.exact_fans = false;
+  const Image bound = build_cone_map(f, o);
+  EXPECT_EQ(std::get<std::string>(bound.metadata.at("fans")), "bound");
+  EXPECT_EQ(std::get<std::string>(exact.metadata.at("fans")), "exact");
+  int narrower = 0;
+  for (int j = 0; j < 16; ++j)
+    for (int i = 0; i < 16; ++i) {
+      const double b = ratio_texels(bound, i, j), e = ratio_texels(exact, i, j);
+      ASSERT_LE(b, e * (1 + 2e-4)) << i << "," << j;
+      narrower += b < e * 0.99;
+      const double psi = brute_psi(f, i, j, bound.at(i, j, 2), true, 8, 0);
+      if (psi > 0) {
+        ASSERT_LE(b, 1.0 / psi * (1 + 1e-6)) << i << "," << j << ": wider than the surface allows";
+      }
+    }
+  EXPECT_GT(narrower, 10);
+}
+
 // A ramp rising along x (clamped: flat beyond the last centre). Its slope is 1/(W-1) per
 // texel, so the conservative ratio is W - 1 texels; nothing descends, so the relaxed cone is
 // unbounded.

@@ -52,7 +52,8 @@
 // kept. A texel no higher point can see (the top of the map, a flat map) stores kConeRatioCap.
 // Cost. Exact relaxed cones of smooth maps whose features span hundreds of texels cost more
 // than conservative ones: every crest in reach that comes within a texel's slope of the cone
-// is searched per texel (docs/benchmarks.md: 4 x 3 sine periods, 3.5x at 1024², 10x at 4096²).
+// is searched per texel (docs/benchmarks.md: 4 x 3 sine periods, 3.5x at 1024², 10x at 4096²);
+// ConeMapOptions::exact_fans = false trades those texels' width for that time.
 //
 // Determinism. Texels are searched in fixed 4 x 4 blocks, each seeded from the block before it
 // in its row of blocks: the output is the same, byte for byte, whatever the thread count. Within
@@ -79,6 +80,12 @@ struct ConeMapOptions {
   // Round what is stored to half floats, conservatively: the heights are quantised first
   // and the cones computed for the quantised surface; ratios round down, apexes up.
   bool half = false;
+  // Relaxed cones: where the apex is reached on F's side and the set seen descending fans out
+  // of that point, take the supremum's limit there exactly (true), or keep a safe bound and
+  // the conservative cone where that is wider (false: narrower cones at those texels, as
+  // before 2026-12-03, much faster on smooth maps whose features span hundreds of texels;
+  // docs/benchmarks.md measures both).
+  bool exact_fans = true;
 };
 
 // Channels per texel: 0 = the texel's height (as read by GL_LINEAR to form S), 1 = the cone
