@@ -126,7 +126,7 @@ double rect_distance(const Rect& r, const Rect& f) {
 // bound already conceded are then left alone instead of refined to the depth cap.
 class ConeSearch {
  public:
-  ConeSearch(const Rect& footprint, double top, bool relaxed, double tolerance, bool exact_fans = true)
+  ConeSearch(const Rect& footprint, double top, bool relaxed, double tolerance, bool exact_fans)
       : f_(footprint), top_(top), relaxed_(relaxed), tol_(tolerance), max_depth_(relaxed ? kMaxDepthRelaxed : kMaxDepth), fans_(exact_fans) {}
 
   double psi = 0;

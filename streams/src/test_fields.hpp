@@ -81,7 +81,8 @@ inline HeightField all_one(int w, int h, Border border) {
 // The sampled supremum lies below the true one by up to a sample spacing's worth of slope
 // (a few per cent at n = 4 where the supremum is a limit on a piece's edge, as relaxed cones'
 // often are): the best samples' pieces are then searched again around them on grids 8, 64
-// and 512 times finer, which leaves the reference within ~1e-3 of the supremum.
+// and 512 times finer (measured on ConeBruteForce's maps: the library's cones, exact within
+// their 1e-4 tolerance, then sit within 2.1e-4 of it; within 6 % before the refinement).
 inline double brute_psi(const HeightField& f, int i, int j, double top, bool relaxed, int n, int tiles) {
   const int w = f.height.width, h = f.height.height;
   // One piece: its origin in pixels (copy offset included) and its four corner values.
