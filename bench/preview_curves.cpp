@@ -82,6 +82,7 @@ struct Options {
   std::vector<int> budgets = {1, 2, 4, 8, 16, 32, 64, 128, 256};
   std::vector<std::string> methods;  // empty: every per-pixel method preview_methods() lists
   bool check = true;                 // cross-check against compare_methods once
+  bool fail_on_miss = false;         // exit 1 when a safe method misses a first intersection
   bool images = false;               // write wrong-hit pictures at each method's largest budget
 };
 
@@ -113,6 +114,8 @@ const char* kUsage =
     "  --triangulated-reference  tessellate the plane as well instead of intersecting the bilinear\n"
     "                       height surface cell by cell (the reference before it was exact)\n"
     "  --no-check           skip the cross-check against compare_methods()\n"
+    "  --fail-on-miss       exit with 1 when a safe method (cone, relaxed-cone, pyramid, sphere-tracing)\n"
+    "                       misses a first intersection at its largest budget (goal (b); a ctest runs it)\n"
     "  --images             also write maps/<map>/<method>_<angle>.png at each method's largest budget:\n"
     "                       red = missed first intersection, yellow = other wrong hit, grey = right\n";
 
@@ -158,6 +161,10 @@ Options parse(int argc, char** argv) {
     }
     if (a == "--no-check") {
       o.check = false;
+      continue;
+    }
+    if (a == "--fail-on-miss") {
+      o.fail_on_miss = true;
       continue;
     }
     if (a == "--images") {
@@ -1003,6 +1010,7 @@ int main(int argc, char** argv) {
         }
       }
     }
+    int safe_misses = 0;  // safe (method, map, view) points that miss a first intersection
     md << "\n### Safe methods at their largest budget (away from the plane's border; missed first intersection: the reference hits and the method finds nothing or a point beyond it)\n\n";
     md << "| map | view | method | budget | wrong hits | missed first | whole-frame wrong hits | mean fetches |\n|---|---|---|---|---|---|---|---|\n";
     for (const std::string& name : o.maps)
@@ -1017,6 +1025,7 @@ int main(int argc, char** argv) {
           md << "| " << name << " | " << fmt("%g", v) << "° | " << m << " | " << p.iterations << " | " << fmt("%.4f", p.interior_fraction()) << " ("
              << p.interior_wrong << " px) | " << fmt("%.4f", missed) << " (" << p.interior_missed << " px) | " << fmt("%.4f", p.m.wrong_hit_fraction)
              << " | " << fmt("%.1f", p.m.mean_iterations) << " |\n";
+          if (p.interior_missed != 0) ++safe_misses;
           goal_b << "  " << name << " " << fmt("%g", v) << " deg " << m << " @" << p.iterations << ": wrong hits " << fmt("%.4f", p.interior_fraction())
                  << ", missed first intersections " << p.interior_missed << " of " << p.interior_pixels << " px "
                  << (p.interior_missed == 0 ? "(met)" : "(NOT MET)") << '\n';
@@ -1036,6 +1045,10 @@ int main(int argc, char** argv) {
     std::printf("goal (b), safe methods miss no first intersection the dense reference finds:\n%s", goal_b.str().c_str());
     std::printf("\nwrote %s, %s and %zu SVG plots (%s ...) in %.0f s\n", (o.out / "curves.csv").string().c_str(),
                 (o.out / "summary.md").string().c_str(), svgs.size(), svgs.empty() ? "" : svgs.front().c_str(), elapsed());
+    if (o.fail_on_miss && safe_misses > 0) {
+      std::fprintf(stderr, "preview_curves: %d safe method/map/view points miss a first intersection (--fail-on-miss)\n", safe_misses);
+      return 1;
+    }
   } catch (const UsageError& e) {
     std::fprintf(stderr, "preview_curves: %s\n", e.what());
     return 2;

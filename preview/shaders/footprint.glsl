@@ -189,7 +189,15 @@ bool footprint_hit(ivec2 cell, vec3 o, vec3 d, float e, float t0, float t1, out 
     float B = pa * sd + pb * rd + pe * (s0 * rd + r0 * sd) - (d.z + 2.0 * e * ta);
     float C = v00 + pa * s0 + pb * r0 + pe * s0 * r0 - a3.z;
     float L = tb - ta;
-    if (C >= 0.0) {
+    // Grazes: where the ray passes a few float steps under the surface, the rounded
+    // coefficients can put S - z just below 0 all along the stretch. A safe method must not
+    // step past a crossing its arithmetic hides (bricks at 80 degrees: a ray under a brick's
+    // edge by 2e-7 of the relief where it crosses a texel-centre line, between two stretches,
+    // found by the double reference), so S - z within rounding of 0 (1e-6 of the terms' size,
+    // ~8 float steps) counts as a crossing: at the stretch's ends and where it peaks inside.
+    // A ray that passes that close above the surface is taken as touching it.
+    float slack = 1e-6 * (abs(v00) + abs(v10) + abs(v01) + abs(v11) + abs(a3.z));
+    if (C >= -slack) {
       t_hit = ta;
       return true;
     }
@@ -209,12 +217,19 @@ bool footprint_hit(ivec2 cell, vec3 o, vec3 d, float e, float t0, float t1, out 
       t_hit = ta + best;
       return true;
     }
-    if ((A * L + B) * L + C >= 0.0) {
+    if (A < 0.0) {
+      float tau = -B / (2.0 * A);
+      if (tau > 0.0 && tau < L && (A * tau + B) * tau + C >= -slack) {
+        t_hit = ta + tau;
+        return true;
+      }
+    }
+    if ((A * L + B) * L + C >= -slack) {
       // Rounding hid the root: bisect the sign change.
       float lo = 0.0, hi = L;
       for (int it = 0; it < kRootBisectionSteps; ++it) {
         float mid = 0.5 * (lo + hi);
-        if ((A * mid + B) * mid + C >= 0.0) hi = mid;
+        if ((A * mid + B) * mid + C >= -slack) hi = mid;
         else lo = mid;
       }
       t_hit = ta + hi;
