@@ -1722,9 +1722,14 @@ void add_seed(std::vector<ConeSearch::Point>& seeds, const ConeSearch::Point& p)
 }
 
 Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
-  HeightField field = input;
-  if (o.half)
-    for (float& v : field.height.pixels) v = static_cast<float>(Imath::half(v));
+  // With half output the cones are those of the heights as stored (rounded to half); a copy
+  // only then (the map's size again in working memory otherwise).
+  HeightField rounded;
+  if (o.half) {
+    rounded = input;
+    for (float& v : rounded.height.pixels) v = static_cast<float>(Imath::half(v));
+  }
+  const HeightField& field = o.half ? rounded : input;
   const int w = field.height.width, h = field.height.height;
   const HalfGrid g = half_grid(field);
   std::vector<float> texel_top(static_cast<size_t>(w) * static_cast<size_t>(h));
