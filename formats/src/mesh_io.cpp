@@ -384,8 +384,22 @@ void write_mesh(const Mesh& mesh, const fs::path& path) {
   if (e == ".obj") {
     OpenMesh::IO::Options opt;
     if (mesh.has_vertex_normals()) opt += OpenMesh::IO::Options::VertexNormal;
-    if (has_uvs(mesh)) opt += OpenMesh::IO::Options::FaceTexCoord;
-    write_with_openmesh(mesh, path, opt);
+    if (!has_uvs(mesh)) {
+      write_with_openmesh(mesh, path, opt);
+      return;
+    }
+    opt += OpenMesh::IO::Options::FaceTexCoord;
+    // OpenMesh's OBJ writer emits the texcoord of every halfedge, boundary halfedges too:
+    // they belong to no face, so nothing sets theirs, and OpenMesh leaves a new property
+    // entry uninitialised. Garbage reached the file as extra `vt` lines, and a NaN among
+    // them broke the ordering of the writer's texcoord map, so a face corner could get a
+    // wrong index (valgrind on Cli.FramesWritesACurvatureMap; once, "OBJ: Invalid face
+    // index" on reading). So a copy is written, with each boundary halfedge given the
+    // texcoord of its opposite halfedge, which is a face corner's UV and already in the file.
+    Mesh copy = mesh;
+    for (auto h : copy.halfedges())
+      if (copy.is_boundary(h)) copy.set_texcoord2D(h, copy.texcoord2D(copy.opposite_halfedge_handle(h)));
+    write_with_openmesh(copy, path, opt);
   } else if (e == ".ply") {
     write_ply(mesh, path);
   } else if (e == ".gltf" || e == ".glb") {

@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <map>
 
 namespace meso {
@@ -53,6 +54,42 @@ TEST_P(MeshRoundTrip, KeepsPositionsFaceOrderAndSeams) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Formats, MeshRoundTrip, ::testing::Values(".obj", ".ply", ".gltf", ".glb"));
+
+// OpenMesh leaves a new halfedge's texcoord uninitialised, and nothing sets a boundary
+// halfedge's (it has no face, so no corner). OpenMesh's OBJ writer reads them anyway (valgrind
+// showed its texcoord map keyed by uninitialised floats), so whatever garbage they hold reached
+// the file, and a NaN among them broke the map's order. A face corner then got index 0,
+// which readers refuse ("OBJ: Invalid face index", seen once in Cli.FramesWritesACurvatureMap).
+// Here the boundary halfedges hold NaN on purpose: the file must read back with every corner's UV.
+TEST(MeshIo, ObjIgnoresTheTexcoordsOfBoundaryHalfedges) {
+  test::TempDir dir;
+  Mesh grid = test::make_parametric(12, 8, [](double s, double t) { return Vec3f(float(s), float(t), 0.0f); }, false, false);
+  ASSERT_TRUE(has_uvs(grid));
+  size_t boundary = 0;
+  for (auto h : grid.halfedges())
+    if (grid.is_boundary(h)) {
+      // Garbage of two kinds: NaN, and a huge value (each with its own second coordinate).
+      const float x = boundary % 2 ? std::numeric_limits<float>::quiet_NaN() : 1e30f;
+      grid.set_texcoord2D(h, Vec2f(x, 2.0f + static_cast<float>(boundary++)));
+    }
+  ASSERT_GT(boundary, 0u);
+  const auto path = dir / "grid.obj";
+  write_mesh(grid, path);
+  const std::string text = test::read_text(path);
+  EXPECT_EQ(text.find("nan"), std::string::npos) << "no garbage texcoord in the file";
+  size_t vt = 0;
+  for (size_t at = text.find("\nvt "); at != std::string::npos; at = text.find("\nvt ", at + 1)) ++vt;
+  EXPECT_EQ(vt, 13u * 9u) << "one texcoord per grid point, no more";
+  const Mesh back = read_mesh(path);
+  ASSERT_EQ(back.n_faces(), grid.n_faces());
+  ASSERT_TRUE(has_uvs(back));
+  const auto a = corners(grid), b = corners(back);
+  for (size_t f = 0; f < a.size(); ++f)
+    for (size_t k = 0; k < 3; ++k) {
+      EXPECT_EQ(a[f][k].first, b[f][k].first) << "face " << f;
+      EXPECT_EQ(a[f][k].second, b[f][k].second) << "face " << f;
+    }
+}
 
 TEST(MeshIo, GltfCarriesTangents) {
   test::TempDir dir;
