@@ -84,6 +84,7 @@ struct Options {
   bool check = true;                 // cross-check against compare_methods once
   bool fail_on_miss = false;         // exit 1 when a safe method misses a first intersection
   float dig_epsilon = -1;            // PreviewOptions::dig_epsilon (< 0: its default)
+  float dig_fallback = -1;           // PreviewOptions::dig_fallback_texels (< 0: its default)
   bool images = false;               // write wrong-hit pictures at each method's largest budget
 };
 
@@ -116,6 +117,7 @@ const char* kUsage =
     "                       height surface cell by cell (the reference before it was exact)\n"
     "  --no-check           skip the cross-check against compare_methods()\n"
     "  --dig-epsilon E      DIG-DM's least epsilon_1, a fraction of the slab (default: the previewer's)\n"
+    "  --dig-fallback T     DIG-DM's fallback span in texels (default: the previewer's; 0: never)\n"
     "  --fail-on-miss       exit with 1 when a safe method (cone, relaxed-cone, pyramid, sphere-tracing)\n"
     "                       misses a first intersection at its largest budget (goal (b); a ctest runs it)\n"
     "  --images             also write maps/<map>/<method>_<angle>.png at each method's largest budget:\n"
@@ -179,7 +181,7 @@ Options parse(int argc, char** argv) {
     }
     static const std::set<std::string> valued = {"--out", "--map-size", "--pixels", "--tiles", "--relief", "--views", "--azimuth", "--zoom", "--reference-cap",
                                                  "--budgets", "--maps", "--methods", "--repetitions", "--target", "--uv-tolerance", "--reference-edge",
-                                                 "--dig-epsilon"};
+                                                 "--dig-epsilon", "--dig-fallback"};
     if (!valued.count(a)) usage_error("unknown option '" + a + "'");
     if (i + 1 >= argc) usage_error(a + " needs a value");
     given[a] = argv[++i];
@@ -198,6 +200,7 @@ Options parse(int argc, char** argv) {
     if (k == "--tiles") o.tiles = to_int(k, v, 1, 64);
     if (k == "--relief") o.relief = to_number(k, v);
     if (k == "--dig-epsilon") o.dig_epsilon = static_cast<float>(std::clamp(to_number(k, v), 0.0, 1.0));
+    if (k == "--dig-fallback") o.dig_fallback = static_cast<float>(std::max(to_number(k, v), 0.0));
     if (k == "--azimuth") o.azimuth = to_number(k, v);
     if (k == "--zoom") o.zoom = to_number(k, v);
     if (k == "--repetitions") o.repetitions = to_int(k, v, 1, 1000);
@@ -827,6 +830,7 @@ int main(int argc, char** argv) {
         v.camera.zoom = static_cast<float>(o.zoom > 0 ? o.zoom : default_zoom(view, o.relief, o.tiles));
         v.shade = PreviewShade::uv;
         if (o.dig_epsilon >= 0) v.dig_epsilon = o.dig_epsilon;
+        if (o.dig_fallback >= 0) v.dig_fallback_texels = o.dig_fallback;
         const auto tr = std::chrono::steady_clock::now();
         const Image ref_uv = reference.render(v);
         std::printf("  reference at %g deg: traced in %.2f s\n", view, std::chrono::duration<double>(std::chrono::steady_clock::now() - tr).count());

@@ -137,6 +137,10 @@ void add_preview(CLI::App& app, Context& ctx) {
   sub->add_option("--dig-epsilon", args->options.dig_epsilon,
                   "dig: least widening of a block's depth interval above its corners' (epsilon_1), fraction of the height range (default 0.1)")
       ->check(CLI::Range(0.0, 1.0) & Finite);
+  sub->add_option("--dig-fallback", args->options.dig_fallback_texels,
+                  "dig: a block whose corner rays are more than this many texels apart across the ray's path searches the "
+                  "whole slab (default 8; 0: never)")
+      ->check(CLI::NonNegativeNumber & Finite);
   sub->add_option("--tess-displacement", args->options.tess_displacement,
                   "tessellation: cut an edge per texel where the displacement along it departs from linear by more than this "
                   "fraction of the height range (default 0.02)")

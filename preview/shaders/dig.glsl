@@ -11,7 +11,8 @@
 // u_dig_epsilon, and epsilon_2 = one step below, then searches it linearly with the same step height (section 5.1, eq. 2:
 // a fixed step, so a short interval takes few steps) and refines by one secant step. The
 // budget u_iterations is the number of linear steps over the whole slab in either pass at
-// grazing angles, adapted to the view as POM's (dig_steps).
+// grazing angles, adapted to the view as POM's (dig_steps). Blocks whose corner rays lie
+// more than u_dig_fallback texels apart across the ray's path search the whole slab instead.
 // Not a safe method: a feature between the corner rays that the corners all miss is missed.
 
 uniform int u_dig_pass;     // 1: the grid, 2: the image
@@ -23,6 +24,9 @@ const int kDigBlock = 4;
 // over ~4 texels): the default 0.1 lowers the wrong hits of rocks at 60 degrees from 1.7 % to
 // 1.3 % at 16 steps for +0.5 fetches per pixel.
 uniform float u_dig_epsilon;
+// Texels across the ray's path between a block's corner rays beyond which the block's pixels
+// search the whole slab (PreviewOptions::dig_fallback_texels; 1e30: never).
+uniform float u_dig_fallback;
 
 // The view ray's descent through the slab; `bend` bends it over a curved base (silhouettes,
 // section 5.1; ray_slab in footprint.glsl). The normalised depth z of a point is its fraction
@@ -72,7 +76,7 @@ float dig_corner_depth(vec3 dir, float bend) {
 
 // Pass 2: the visible point's s. `amortised` receives this pixel's share of pass 1's fetches
 // (the block's corner ray over the block's 16 pixels).
-float dig_trace(vec3 dir, float bend, out float amortised, out bool escaped) {
+float dig_trace(vec3 dir, float bend, vec2 uv_dx, vec2 uv_dy, out float amortised, out bool escaped) {
   DigRay r = dig_ray(dir, bend);
   escaped = false;
   ivec2 block = ivec2(gl_FragCoord.xy) / kDigBlock;
@@ -90,7 +94,21 @@ float dig_trace(vec3 dir, float bend, out float amortised, out bool escaped) {
   // epsilon_1 and epsilon_2 cover one step of the corner rays' search, whose count was
   // rounded from their own directions (dig_steps): up to one fewer than this pixel's.
   float corner_step = 1.0 / float(max(steps - 1, 1));
-  // Silhouette blocks (a corner off the mesh) search the whole slab.
+  // Along the ray's path the corner rays sweep the texels themselves; across it they are a
+  // block apart in texture space (the screen derivatives of the UVs, in texels: `across`;
+  // straight on, every way is across). Where that exceeds u_dig_fallback (minified regions),
+  // a feature between them rises unseen, whatever epsilon_1: the block searches the whole
+  // slab, as POM does (on the default frames of bench/preview_curves this brought DIG-DM's
+  // floor at large budgets down to POM's; docs/benchmarks.md).
+  vec2 texels = vec2(textureSize(u_height, 0));
+  vec2 ax = uv_dx * texels, ay = uv_dy * texels, path = dir.xy * texels;
+  float across = float(kDigBlock) * max(length(ax), length(ay));
+  if (dot(path, path) > 0.0) {
+    vec2 n = normalize(vec2(-path.y, path.x));
+    across = float(kDigBlock) * max(abs(dot(ax, n)), abs(dot(ay, n)));
+  }
+  known = known && across <= u_dig_fallback;
+  // Silhouette blocks (a corner off the mesh) and minified ones search the whole slab.
   float top = known ? min(1.0, hi + max(corner_step, u_dig_epsilon)) : 1.0;
   float bottom = known ? max(0.0, lo - corner_step) : 0.0;
   float s_prev = dig_s(r, top);

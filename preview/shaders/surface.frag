@@ -43,6 +43,7 @@ void main() {
   // Interpolated normals or tangents can cancel (opposite vertex normals across a fold):
   // fall back to a frame from the triangle itself rather than normalise a zero vector.
   vec3 face_n = normalize(cross(dFdx(v_position), dFdy(v_position)));
+  vec2 uv_dx = dFdx(v_uv), uv_dy = dFdy(v_uv);  // here, in uniform control flow (DIG-DM's fallback)
   if (dot(n, n) < 1e-12) n = face_n;
   vec3 nn = normalize(n);
   vec3 t_perp = t - nn * dot(nn, t);
@@ -146,7 +147,7 @@ void main() {
     out_color = vec4(facing ? dig_corner_depth(dir, bend) : -1.0, float(g_fetches), 0.0, 1.0);
     return;
   } else if (u_method == kDig && facing) {
-    uv = v_uv + dir.xy * dig_trace(dir, bend, amortised_fetches, escaped);
+    uv = v_uv + dir.xy * dig_trace(dir, bend, uv_dx, uv_dy, amortised_fetches, escaped);
   } else if (u_method == kVdm && facing) {
     if (!vdm_trace(view, tn, bn, nn, dir, uv)) discard;  // the ray left the bent height field
   }

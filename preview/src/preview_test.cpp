@@ -607,6 +607,30 @@ TEST(Preview, DigAgreesWithADenseSearchAndFetchesLessThanRelief) {
   }
 }
 
+// Minified (the rough map tiled 4 x 4 on the quad: a block's corner rays ~10 texels apart
+// across their paths), a one-texel feature fits between DIG-DM's corner rays and rises above
+// all four: its interval misses it, whatever epsilon_1. Those blocks search the whole slab
+// (dig_fallback_texels), which brings DIG-DM back to the dense search.
+TEST(Preview, DigSearchesTheWholeSlabWhereItsCornerRaysAreFarApart) {
+  Mesh quad = test::make_grid(1, 1);
+  for (auto h : quad.halfedges())
+    if (!quad.is_boundary(h)) quad.set_texcoord2D(h, quad.texcoord2D(h) * 4.0f);
+  const PreviewMaps maps = cone_maps(ConeScene::rough, Border::wrap);
+  HeadlessPreview preview(quad, maps);
+  for (float angle : {45.0f, 65.0f}) {
+    const Image reference = preview.render(view_options("relief", angle, 35.0f, 2048, PreviewShade::uv));
+    PreviewOptions dig = view_options("dig", angle, 35.0f, 64, PreviewShade::uv);
+    dig.dig_fallback_texels = 0.0f;  // never: the intervals alone
+    const Agreement intervals = agreement(preview.render(dig), reference, 2, 0.5 / 64);
+    dig.dig_fallback_texels = 8.0f;  // the default
+    const Agreement fallback = agreement(preview.render(dig), reference, 2, 0.5 / 64);
+    std::printf("dig minified %.0f deg: %.4f of pixels within half a texel of the dense search with the fallback, %.4f without\n",
+                static_cast<double>(angle), fallback.fraction(), intervals.fraction());
+    EXPECT_GE(fallback.fraction(), 0.95) << angle;
+    EXPECT_GT(fallback.fraction(), intervals.fraction() + 0.02) << angle;
+  }
+}
+
 TEST(Preview, PomFindsTheExactCrossingOfALinearRamp) {
   const Mesh quad = test::make_grid(1, 1);
   const float k = 0.1f;

@@ -820,6 +820,8 @@ void SurfaceRenderer::draw(const PreviewOptions& o, int width, int height) {
   glUniform1i(glGetUniformLocation(prog, "u_binary_steps"), std::clamp(o.binary_steps, 0, 64));
   glUniform1i(glGetUniformLocation(prog, "u_bisection_steps"), std::clamp(o.bisection_steps, 0, 64));
   glUniform1f(glGetUniformLocation(prog, "u_dig_epsilon"), std::isfinite(o.dig_epsilon) ? std::clamp(o.dig_epsilon, 0.0f, 1.0f) : 0.1f);
+  glUniform1f(glGetUniformLocation(prog, "u_dig_fallback"),
+              std::isfinite(o.dig_fallback_texels) && o.dig_fallback_texels > 0 ? o.dig_fallback_texels : 1e30f);
   const int cone = o.method == "cone" ? 0 : o.method == "relaxed-cone" ? 1 : -1;
   const bool pyramid = o.method == "pyramid";
   const bool stream_missing = o.method == "sphere-tracing" ? !sdf_tex_

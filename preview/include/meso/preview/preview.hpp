@@ -143,6 +143,10 @@ struct PreviewOptions {
   // dig: the least widening of a block's depth interval above its corners' depths (the depth-
   // interval-grid paper's epsilon_1, eq. 1), as a fraction of the slab's height, 0..1.
   float dig_epsilon = 0.1f;
+  // dig: where a block's corner rays are more than this many texels apart across the ray's
+  // path (minified regions, from the UV derivatives), features between them go unseen, and the
+  // block's pixels search the whole slab as POM does. 0: never. Measured in docs/benchmarks.md.
+  float dig_fallback_texels = 8.0f;
   // tessellation's adaptive edge tests (survey section 3; tess.tesc): an edge is cut at every
   // texel where the displacement sampled at tess_edge_samples + 1 points along it (1..64)
   // departs from the straight line between its ends by more than tess_displacement of the
