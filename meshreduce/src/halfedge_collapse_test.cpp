@@ -52,8 +52,13 @@ void expect_same_collapses(const Mesh& mesh, uint32_t seed, int* made) {
   reduce::compact(b);
   ASSERT_EQ(structure(a), structure(b)) << "after compaction";
   for (auto v : a.vertices()) ASSERT_EQ(a.point(v), b.point(VertexHandle(v.idx())));
+  // UVs of face corners only: a boundary halfedge's texcoord is never set (OpenMesh leaves it
+  // uninitialised; valgrind flagged this comparison, which a NaN among them would fail).
   if (a.has_halfedge_texcoords2D()) {
-    for (auto h : a.halfedges()) ASSERT_EQ(a.texcoord2D(h), b.texcoord2D(HalfedgeHandle(h.idx())));
+    for (auto h : a.halfedges()) {
+      if (a.is_boundary(h)) continue;
+      ASSERT_EQ(a.texcoord2D(h), b.texcoord2D(HalfedgeHandle(h.idx())));
+    }
   }
 }
 
