@@ -99,7 +99,7 @@ float dig_trace(vec3 dir, float bend, vec2 uv_dx, vec2 uv_dy, out float amortise
   // straight on, every way is across). Where that exceeds u_dig_fallback (minified regions),
   // a feature between them rises unseen, whatever epsilon_1: the block searches the whole
   // slab, as POM does (on the default frames of bench/preview_curves this brought DIG-DM's
-  // floor at large budgets down to POM's; docs/benchmarks.md).
+  // floor at large budgets most of the way down to POM's; docs/benchmarks.md).
   vec2 texels = vec2(textureSize(u_height, 0));
   vec2 ax = uv_dx * texels, ay = uv_dy * texels, path = dir.xy * texels;
   float across = float(kDigBlock) * max(length(ax), length(ay));

@@ -104,8 +104,9 @@ std::string preview_status_line(const PreviewOptions& o, double ms) {
   char knobs[160] = "";
   if (o.method == "relief") std::snprintf(knobs, sizeof knobs, " | %d halvings", o.binary_steps);
   else if (o.method == "relaxed-cone") std::snprintf(knobs, sizeof knobs, " | %d bisections", o.bisection_steps);
-  else if (o.method == "dig") std::snprintf(knobs, sizeof knobs,  " | epsilon %.3g | fallback %.3g texels", static_cast<double>(o.dig_epsilon),
-                                          static_cast<double>(o.dig_fallback_texels));
+  else if (o.method == "dig")
+    std::snprintf(knobs, sizeof knobs, " | epsilon %.3g | fallback %.3g texels", static_cast<double>(o.dig_epsilon),
+                  static_cast<double>(o.dig_fallback_texels));
   else if (o.method == "tessellation")
     std::snprintf(knobs, sizeof knobs, " | edge tests %.3g of range, %.3g deg, %.3g px, %d samples", static_cast<double>(o.tess_displacement),
                   static_cast<double>(o.tess_normal_angle), static_cast<double>(o.tess_pixels), o.tess_edge_samples);
