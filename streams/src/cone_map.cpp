@@ -39,9 +39,21 @@ constexpr int kArcDepth = 24;
 // between texel centres, where S is one bilinear polynomial, so S on the piece is exactly
 // the bilinear interpolation of the piece's four grid values.
 struct HalfGrid {
-  int gw = 0, gh = 0;
+  int gw = 0, gh = 0, w = 0;
+  const float* texels = nullptr;  // the height field's, row by row
+  std::vector<size_t> row;        // where row b starts in v
   std::vector<float> v;
-  float at(int a, int b) const { return v[static_cast<size_t>(b) * static_cast<size_t>(gw) + static_cast<size_t>(a)]; }
+  // The 3 x 3 grid values of texel (i, j), point (2i + c, 2j + r) at 3 r + c: three rows, no
+  // parity tests (what the searches read: a texel's pieces, plane, gradient box, maximum).
+  std::array<float, 9> texel(int i, int j) const {
+    const float* r0 = &v[row[static_cast<size_t>(2 * j)] + static_cast<size_t>(2 * i)];
+    const float* r1 = &v[row[static_cast<size_t>(2 * j + 1)] + static_cast<size_t>(i)];
+    const float* r2 = &v[row[static_cast<size_t>(2 * j + 2)] + static_cast<size_t>(2 * i)];
+    return {r0[0], r0[1], r0[2], r1[0], centre(i, j), r1[1], r2[0], r2[1], r2[2]};
+  }
+  // bilinear_blend() at fractions (0, 0) of heights >= 0: the texel plus 0 (+0 for -0), bit
+  // for bit what the grid held there.
+  float centre(int i, int j) const { return texels[static_cast<size_t>(j) * static_cast<size_t>(w) + static_cast<size_t>(i)] + 0.0f; }
 };
 
 // Grid point a along an axis is S at pixel a / 2: between texels (a - 1) div 2 and the next,
@@ -63,14 +75,23 @@ HalfGrid half_grid(const HeightField& f) {
   HalfGrid g;
   g.gw = 2 * w + 1;
   g.gh = 2 * h + 1;
-  g.v.resize(static_cast<size_t>(g.gw) * static_cast<size_t>(g.gh));
+  g.w = w;
+  g.texels = f.height.pixels.data();
+  g.row.resize(static_cast<size_t>(g.gh));
+  size_t n = 0;
+  for (int b = 0; b < g.gh; ++b) {
+    g.row[static_cast<size_t>(b)] = n;
+    n += static_cast<size_t>((b & 1) != 0 ? w + 1 : g.gw);
+  }
+  g.v.resize(n);
   tbb::parallel_for(tbb::blocked_range<int>(0, g.gh), [&](const tbb::blocked_range<int>& rows) {
     for (int b = rows.begin(); b < rows.end(); ++b) {
       const int y = grid_texel(b);
       const float ty = grid_fraction(b);
-      for (int a = 0; a < g.gw; ++a) {
+      const int step = (b & 1) != 0 ? 2 : 1;
+      for (int a = 0; a < g.gw; a += step) {
         const int x = grid_texel(a);
-        g.v[static_cast<size_t>(b) * static_cast<size_t>(g.gw) + static_cast<size_t>(a)] =
+        g.v[g.row[static_cast<size_t>(b)] + static_cast<size_t>(step == 2 ? a >> 1 : a)] =
             bilinear_blend(at(x, y), at(x + 1, y), at(x, y + 1), at(x + 1, y + 1), grid_fraction(a), ty);
       }
     }
@@ -276,9 +297,10 @@ class ConeSearch {
     const double px = ox + x, py = oy + y;
     const bool in_row = py == f_.y0;  // else in F's column: the gap is along y
     double upper = relaxed_ ? 0.0 : psi;  // conservative cones raise psi itself
+    const std::array<float, 9> grid = g.texel(x, y);
     for (int r = 0; r <= 2; ++r)
       for (int c = 0; c <= 2; ++c) {
-        const double v = g.at(2 * x + c, 2 * y + r);
+        const double v = grid[static_cast<size_t>(3 * r + c)];
         if (v <= top_) continue;
         const double qx = px + 0.5 * c, qy = py + 0.5 * r;
         const double d = in_row ? std::max(qx - f_.x1, f_.x0 - qx) : std::max(qy - f_.y1, f_.y0 - qy);
@@ -945,9 +967,10 @@ float float_step(float v, bool up) {
 // y and dS/dy in x, so the pieces' corners give the extremes. Rounded outward.
 void texel_gradients(const HalfGrid& grid, int i, int j, float* q) {
   double lo_x = kInf, hi_x = -kInf, lo_y = kInf, hi_y = -kInf;
-  for (int b = 2 * j; b <= 2 * j + 1; ++b)
-    for (int a = 2 * i; a <= 2 * i + 1; ++a) {
-      const double v00 = grid.at(a, b), v10 = grid.at(a + 1, b), v01 = grid.at(a, b + 1), v11 = grid.at(a + 1, b + 1);
+  const std::array<float, 9> g = grid.texel(i, j);
+  for (size_t b = 0; b <= 1; ++b)
+    for (size_t a = 0; a <= 1; ++a) {
+      const double v00 = g[3 * b + a], v10 = g[3 * b + a + 1], v01 = g[3 * b + a + 3], v11 = g[3 * b + a + 4];
       for (double gx : {2 * (v10 - v00), 2 * (v11 - v01)}) {
         lo_x = std::min(lo_x, gx);
         hi_x = std::max(hi_x, gx);
@@ -974,15 +997,16 @@ float up(double v) {
 // it), a exact (S minus an affine function is bilinear on each piece, so the 9 grid points
 // hold its maximum).
 void texel_plane(const HalfGrid& grid, int i, int j, float* q) {
+  const std::array<float, 9> g = grid.texel(i, j);
   double gx = 0, gy = 0;
-  for (int k = 0; k <= 2; ++k) {
-    gx += (grid.at(2 * i + 2, 2 * j + k) - grid.at(2 * i, 2 * j + k)) / 3.0;
-    gy += (grid.at(2 * i + k, 2 * j + 2) - grid.at(2 * i + k, 2 * j)) / 3.0;
+  for (size_t k = 0; k <= 2; ++k) {
+    gx += (g[3 * k + 2] - g[3 * k]) / 3.0;
+    gy += (g[6 + k] - g[k]) / 3.0;
   }
   const float fx = static_cast<float>(gx), fy = static_cast<float>(gy);
   double a = -kInf;
-  for (int b = 0; b <= 2; ++b)
-    for (int c = 0; c <= 2; ++c) a = std::max(a, grid.at(2 * i + c, 2 * j + b) - fx * (0.5 * c - 0.5) - fy * (0.5 * b - 0.5));
+  for (size_t b = 0; b <= 2; ++b)
+    for (size_t c = 0; c <= 2; ++c) a = std::max(a, g[3 * b + c] - fx * (0.5 * static_cast<double>(c) - 0.5) - fy * (0.5 * static_cast<double>(b) - 0.5));
   q[0] = up(a);
   q[1] = fx;
   q[2] = fy;
@@ -1613,8 +1637,7 @@ class BlockSearch {
           if (apart != 0) keep = planes(leaves_.plane(n.x, n.y), r, top, s, keep, apart);
         }
         if (keep == 0) continue;
-        std::array<Piece, 4> pieces = {piece(ox, oy, 2 * n.x, 2 * n.y), piece(ox, oy, 2 * n.x + 1, 2 * n.y), piece(ox, oy, 2 * n.x, 2 * n.y + 1),
-                                       piece(ox, oy, 2 * n.x + 1, 2 * n.y + 1)};
+        const std::array<Piece, 4> pieces = texel_pieces(ox, oy, n.x, n.y);
         for (Mask q = keep; q != 0; q &= q - 1) {
           const size_t k = static_cast<size_t>(low_bit(q));
           if (!((whole >> k) & 1) || !s[k].side_texel_settles(grid_, n.x, n.y, ox, oy))
@@ -1680,14 +1703,18 @@ class BlockSearch {
     const int slot = (y - b.j0 + 1) * (kBlock + 2) + (x - b.i0 + 1);
     std::array<Piece, 4>& ps = around_[static_cast<size_t>(slot)];
     if (((around_built_ >> slot) & 1) == 0) {
-      ps = {piece(0, 0, 2 * x, 2 * y), piece(0, 0, 2 * x + 1, 2 * y), piece(0, 0, 2 * x, 2 * y + 1), piece(0, 0, 2 * x + 1, 2 * y + 1)};
+      ps = texel_pieces(0, 0, x, y);
       around_built_ |= uint64_t{1} << slot;
     }
     return ps;
   }
 
-  Piece piece(double ox, double oy, int a, int b) const {
-    return Piece(ox + 0.5 * a, oy + 0.5 * b, grid_.at(a, b), grid_.at(a + 1, b), grid_.at(a, b + 1), grid_.at(a + 1, b + 1));
+  // The four pieces of texel (x, y) of the map shifted by (ox, oy) pixels.
+  std::array<Piece, 4> texel_pieces(double ox, double oy, int x, int y) const {
+    const std::array<float, 9> g = grid_.texel(x, y);
+    const double px = ox + x, py = oy + y;
+    return {Piece(px, py, g[0], g[1], g[3], g[4]), Piece(px + 0.5, py, g[1], g[2], g[4], g[5]), Piece(px, py + 0.5, g[3], g[4], g[6], g[7]),
+            Piece(px + 0.5, py + 0.5, g[4], g[5], g[7], g[8])};
   }
 
   const MaxTree& tree_;
@@ -1736,8 +1763,7 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
   for (int j = 0; j < h; ++j)
     for (int i = 0; i < w; ++i) {
       float m = -1.0f;
-      for (int b = 2 * j; b <= 2 * j + 2; ++b)
-        for (int a = 2 * i; a <= 2 * i + 2; ++a) m = std::max(m, g.at(a, b));
+      for (float v : g.texel(i, j)) m = std::max(m, v);
       texel_top[static_cast<size_t>(j) * static_cast<size_t>(w) + static_cast<size_t>(i)] = m;
     }
   const bool relaxed = o.kind == ConeKind::relaxed;
