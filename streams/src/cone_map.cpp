@@ -38,9 +38,13 @@ constexpr int kArcDepth = 24;
 // b in [0, 2H]. A quarter-texel piece [a/2, (a+1)/2] x [b/2, (b+1)/2] lies inside one cell
 // between texel centres, where S is one bilinear polynomial, so S on the piece is exactly
 // the bilinear interpolation of the piece's four grid values.
+// A quarter of the points (a and b odd) are texel centres, where S is the texel itself: they
+// are read from the height field, not stored (the map's size less working memory, at +0.7 %
+// instructions at most). The others are stored row by row: rows with b even whole (2W + 1
+// values), rows with b odd at even a only (W + 1 values).
 struct HalfGrid {
   int gw = 0, gh = 0, w = 0;
-  const float* texels = nullptr;  // the height field's, row by row
+  const float* texels = nullptr;  // the height field's, row by row (it outlives the grid)
   std::vector<size_t> row;        // where row b starts in v
   std::vector<float> v;
   // The 3 x 3 grid values of texel (i, j), point (2i + c, 2j + r) at 3 r + c: three rows, no
