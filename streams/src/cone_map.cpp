@@ -1117,6 +1117,10 @@ MaxTree max_tree(std::vector<float> top, const HalfGrid& grid, int width, int he
     t.plane.push_back(std::move(cp));
     t.gradient.push_back(std::move(cg));
   }
+  // Level 1's gradient boxes (4 floats per 2 x 2 texels: the map's size) were needed only to
+  // build level 2's: the walk unions the four texels' boxes instead (LeafCache), the same
+  // values (an outward-rounded box's union is exact).
+  if (boxes && t.gradient.size() > 1) std::vector<float>().swap(t.gradient[1]);
   return t;
 }
 
@@ -1606,7 +1610,7 @@ class BlockSearch {
         // smooth bumps -15 %). (The tree keeps its planes: the conservative search that
         // relaxed cones fall back to where a bound stayed loose tests them.)
         if (relaxed_) {
-          keep = rising(&tree_.gradient[static_cast<size_t>(n.level)][index * 4], r, b, keep);
+          keep = rising(n.level == 1 ? level1_box(n.x, n.y) : &tree_.gradient[static_cast<size_t>(n.level)][index * 4], r, b, keep);
         } else {
           keep = planes(&tree_.plane[static_cast<size_t>(n.level)][index * 3], r, top, s, keep, apart);
         }
@@ -1712,6 +1716,33 @@ class BlockSearch {
     }
     return ps;
   }
+
+  // The gradient box of level-1 node (x, y): the union of its texels' (max_tree releases
+  // that level's boxes), kept in a direct-mapped cache as the leaves' are (neighbouring
+  // blocks test mostly the same nodes).
+  const float* level1_box(int x, int y) {
+    Level1Box& e = level1_[static_cast<size_t>((y % kLevel1Side) * kLevel1Side + x % kLevel1Side)];
+    if (e.x == x && e.y == y) return e.box.data();
+    e.x = x;
+    e.y = y;
+    e.box = {std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity(),
+             -std::numeric_limits<float>::infinity()};
+    for (int yy = 2 * y; yy <= std::min(2 * y + 1, h_ - 1); ++yy)
+      for (int xx = 2 * x; xx <= std::min(2 * x + 1, w_ - 1); ++xx) {
+        const float* t = leaves_.box(xx, yy);
+        e.box[0] = std::min(e.box[0], t[0]);
+        e.box[1] = std::max(e.box[1], t[1]);
+        e.box[2] = std::min(e.box[2], t[2]);
+        e.box[3] = std::max(e.box[3], t[3]);
+      }
+    return e.box.data();
+  }
+  static constexpr int kLevel1Side = 32;
+  struct Level1Box {
+    int x = -1, y = -1;
+    std::array<float, 4> box{};
+  };
+  std::vector<Level1Box> level1_ = std::vector<Level1Box>(kLevel1Side * kLevel1Side);
 
   // The four pieces of texel (x, y) of the map shifted by (ox, oy) pixels.
   std::array<Piece, 4> texel_pieces(double ox, double oy, int x, int y) const {
