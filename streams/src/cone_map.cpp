@@ -990,6 +990,19 @@ void texel_gradients(const HalfGrid& grid, int i, int j, float* q) {
   q[3] = float_step(static_cast<float>(hi_y), true);
 }
 
+// Gradient boxes (gx in [0], [1], gy in [2], [3]) of unions of texels: start empty, take in
+// each part's box (min and max: exact, so a union of outward-rounded boxes stays outward).
+std::array<float, 4> empty_box() {
+  constexpr float inf = std::numeric_limits<float>::infinity();
+  return {inf, -inf, inf, -inf};
+}
+void widen_box(float* box, const float* part) {
+  box[0] = std::min(box[0], part[0]);
+  box[1] = std::max(box[1], part[1]);
+  box[2] = std::min(box[2], part[2]);
+  box[3] = std::max(box[3], part[3]);
+}
+
 // A float not below v.
 float up(double v) {
   float f = static_cast<float>(v);
@@ -1100,15 +1113,9 @@ MaxTree max_tree(std::vector<float> top, const HalfGrid& grid, int width, int he
           cp[n * 3 + 2] = fy;
           if (!boxes) continue;
           float* box = &cg[n * 4];
-          box[0] = box[2] = std::numeric_limits<float>::infinity();
-          box[1] = box[3] = -std::numeric_limits<float>::infinity();
-          for (int i = 0; i < count; ++i) {
-            const float* child = kids[static_cast<size_t>(i)].box;
-            box[0] = std::min(box[0], child[0]);
-            box[1] = std::max(box[1], child[1]);
-            box[2] = std::min(box[2], child[2]);
-            box[3] = std::max(box[3], child[3]);
-          }
+          const std::array<float, 4> none = empty_box();
+          std::copy(none.begin(), none.end(), box);
+          for (int i = 0; i < count; ++i) widen_box(box, kids[static_cast<size_t>(i)].box);
         }
     });
     t.w.push_back(cw);
@@ -1610,7 +1617,8 @@ class BlockSearch {
         // smooth bumps -15 %). (The tree keeps its planes: the conservative search that
         // relaxed cones fall back to where a bound stayed loose tests them.)
         if (relaxed_) {
-          keep = rising(n.level == 1 ? level1_box(n.x, n.y) : &tree_.gradient[static_cast<size_t>(n.level)][index * 4], r, b, keep);
+          const std::array<float, 4> texels = n.level == 1 ? level1_box(n.x, n.y) : std::array<float, 4>{};
+          keep = rising(n.level == 1 ? texels.data() : &tree_.gradient[static_cast<size_t>(n.level)][index * 4], r, b, keep);
         } else {
           keep = planes(&tree_.plane[static_cast<size_t>(n.level)][index * 3], r, top, s, keep, apart);
         }
@@ -1718,31 +1726,13 @@ class BlockSearch {
   }
 
   // The gradient box of level-1 node (x, y): the union of its texels' (max_tree releases
-  // that level's boxes), kept in a direct-mapped cache as the leaves' are (neighbouring
-  // blocks test mostly the same nodes).
-  const float* level1_box(int x, int y) {
-    Level1Box& e = level1_[static_cast<size_t>((y % kLevel1Side) * kLevel1Side + x % kLevel1Side)];
-    if (e.x == x && e.y == y) return e.box.data();
-    e.x = x;
-    e.y = y;
-    e.box = {std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity(),
-             -std::numeric_limits<float>::infinity()};
+  // that level's boxes; the texels' come from the leaf cache).
+  std::array<float, 4> level1_box(int x, int y) {
+    std::array<float, 4> box = empty_box();
     for (int yy = 2 * y; yy <= std::min(2 * y + 1, h_ - 1); ++yy)
-      for (int xx = 2 * x; xx <= std::min(2 * x + 1, w_ - 1); ++xx) {
-        const float* t = leaves_.box(xx, yy);
-        e.box[0] = std::min(e.box[0], t[0]);
-        e.box[1] = std::max(e.box[1], t[1]);
-        e.box[2] = std::min(e.box[2], t[2]);
-        e.box[3] = std::max(e.box[3], t[3]);
-      }
-    return e.box.data();
+      for (int xx = 2 * x; xx <= std::min(2 * x + 1, w_ - 1); ++xx) widen_box(box.data(), leaves_.box(xx, yy));
+    return box;
   }
-  static constexpr int kLevel1Side = 32;
-  struct Level1Box {
-    int x = -1, y = -1;
-    std::array<float, 4> box{};
-  };
-  std::vector<Level1Box> level1_ = std::vector<Level1Box>(kLevel1Side * kLevel1Side);
 
   // The four pieces of texel (x, y) of the map shifted by (ox, oy) pixels.
   std::array<Piece, 4> texel_pieces(double ox, double oy, int x, int y) const {
