@@ -131,7 +131,7 @@ void add_streams(CLI::App& app, Context& ctx) {
         ->capture_default_str();
     if (relaxed)
       cone->add_option("--fans", *fans,
-                       "Where the apex sits on the footprint's side: exact (the widest cone) or bound (a safe, narrower one; much faster on smooth "
+                       "Where the apex sits on the footprint's side: exact (the widest cone) or bound (a safe, narrower one; faster on smooth "
                        "maps with features hundreds of texels wide)")
           ->check(CLI::IsMember({"exact", "bound"}))
           ->capture_default_str();

@@ -2,10 +2,13 @@
 
 #include <Imath/half.h>
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_for_each.h>
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -1860,73 +1863,105 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
 
   Image out(w, h, 3);
   const int blocks_x = (w + kBlock - 1) / kBlock, blocks_y = (h + kBlock - 1) / kBlock;
-  // Rows of blocks in parallel; within a row, blocks in order, each seeded with the steepest
-  // points of the block before it (seeds chain along a row of blocks only, so results never
-  // depend on how rows are split among threads).
-  tbb::parallel_for(tbb::blocked_range<int>(0, blocks_y), [&](const tbb::blocked_range<int>& rows) {
-    BlockSearch walk(tree, g, w, h, field.border == Border::wrap, o.tolerance, o.exact_fans);
+  // Blocks in a wavefront: block (bi, bj) starts once the block on its left and the one
+  // above it are done, and is seeded with both's steepest points (a texel's steepest point
+  // is often its neighbours'; seeds from above as well as from the left: 1024² bumps, one
+  // thread, relaxed -22 %, conservative -12 %). What a block passes on depends on its two
+  // predecessors only, so results never depend on the threads or the order they run in.
+  struct Seeds {
+    std::vector<ConeSearch::Point> conservative, relaxed;
+  };
+  std::vector<Seeds> from_left(static_cast<size_t>(blocks_y)), from_above(static_cast<size_t>(blocks_x));
+  struct Worker {
+    BlockSearch walk;
     std::vector<ConeSearch> searches, fallback;
-    std::vector<ConeSearch::Point> seeds_conservative, seeds_relaxed, seeds;
-    for (int bj = rows.begin(); bj < rows.end(); ++bj) {
-      seeds_conservative.clear();
-      seeds_relaxed.clear();
-      for (int bi = 0; bi < blocks_x; ++bi) {
-        Block b;
-        b.i0 = bi * kBlock;
-        b.j0 = bj * kBlock;
-        b.bw = std::min(kBlock, w - b.i0);
-        b.bh = std::min(kBlock, h - b.j0);
-        b.f = Rect{static_cast<double>(b.i0), static_cast<double>(b.j0), static_cast<double>(b.i0 + b.bw), static_cast<double>(b.j0 + b.bh)};
-        BlockSearch::PerTexel top{}, cap{}, psi{};
-        Mask all = 0;
-        for (int y = 0; y < b.bh; ++y)
-          for (int x = 0; x < b.bw; ++x) {
-            const size_t k = static_cast<size_t>(y * kBlock + x);
-            top[k] = apex[static_cast<size_t>(b.j0 + y) * static_cast<size_t>(w) + static_cast<size_t>(b.i0 + x)];
-            cap[k] = kInf;
-            all |= Mask{1} << k;
-          }
-        // One search per texel: the supremum of the slope (relaxed: over points seen
-        // descending).
-        walk.run(b, top, relaxed, all, cap, relaxed ? seeds_relaxed : seeds_conservative, searches);
-        std::vector<ConeSearch::Point>& next = relaxed ? seeds_relaxed : seeds_conservative;
-        next.clear();
-        Mask loose = 0;
-        for (Mask q = all; q != 0; q &= q - 1) {
-          const size_t k = static_cast<size_t>(low_bit(q));
-          psi[k] = searches[k].level();
-          add_seed(next, searches[k].best);
-          // A relaxed cone is never narrower than the conservative one (which satisfies the
-          // relaxed condition too); where the relaxed search kept a loose bound (near a fan)
-          // the conservative search decides, up to the relaxed bound.
-          if (relaxed && searches[k].bound > searches[k].psi * (1 + o.tolerance)) {
-            loose |= Mask{1} << k;
-            cap[k] = psi[k];
-          }
-        }
-        if (loose != 0) {
-          seeds = seeds_conservative;
-          seeds.insert(seeds.end(), seeds_relaxed.begin(), seeds_relaxed.end());  // points above T either way
-          walk.run(b, top, false, loose, cap, seeds, fallback);
-          seeds_conservative.clear();
-          for (Mask q = loose; q != 0; q &= q - 1) {
-            const size_t k = static_cast<size_t>(low_bit(q));
-            psi[k] = std::min(psi[k], fallback[k].level());
-            add_seed(seeds_conservative, fallback[k].best);
-          }
-        }
-        for (Mask q = all; q != 0; q &= q - 1) {
-          const int k = low_bit(q);
-          const int i = b.i0 + (k & (kBlock - 1)), j = b.j0 + (k >> kBlockLog);
-          const double p = psi[static_cast<size_t>(k)];
-          const double ratio = p > 0 ? 1.0 / (p * w) : kInf;  // texels -> units of u
-          out.at(i, j, 0) = field.height.at(i, j);
-          out.at(i, j, 1) = round_down(std::min(ratio, static_cast<double>(kConeRatioCap)), o.half);
-          const double t = top[static_cast<size_t>(k)];
-          out.at(i, j, 2) = o.half ? round_up_half(static_cast<float>(t)) : static_cast<float>(t);
-        }
+    Seeds in;
+    std::vector<ConeSearch::Point> seeds;
+  };
+  tbb::enumerable_thread_specific<Worker> workers(
+      [&] { return Worker{BlockSearch(tree, g, w, h, field.border == Border::wrap, o.tolerance, o.exact_fans), {}, {}, {}, {}}; });
+  auto search_block = [&](int bi, int bj) {
+    Worker& wk = workers.local();
+    Block b;
+    b.i0 = bi * kBlock;
+    b.j0 = bj * kBlock;
+    b.bw = std::min(kBlock, w - b.i0);
+    b.bh = std::min(kBlock, h - b.j0);
+    b.f = Rect{static_cast<double>(b.i0), static_cast<double>(b.j0), static_cast<double>(b.i0 + b.bw), static_cast<double>(b.j0 + b.bh)};
+    BlockSearch::PerTexel top{}, cap{}, psi{};
+    Mask all = 0;
+    for (int y = 0; y < b.bh; ++y)
+      for (int x = 0; x < b.bw; ++x) {
+        const size_t k = static_cast<size_t>(y * kBlock + x);
+        top[k] = apex[static_cast<size_t>(b.j0 + y) * static_cast<size_t>(w) + static_cast<size_t>(b.i0 + x)];
+        cap[k] = kInf;
+        all |= Mask{1} << k;
+      }
+    Seeds& left = from_left[static_cast<size_t>(bj)];
+    Seeds& above = from_above[static_cast<size_t>(bi)];
+    wk.in.conservative.clear();
+    wk.in.relaxed.clear();
+    for (const Seeds* from : {&left, &above}) {
+      for (const ConeSearch::Point& p : from->conservative) add_seed(wk.in.conservative, p);
+      for (const ConeSearch::Point& p : from->relaxed) add_seed(wk.in.relaxed, p);
+    }
+    Seeds out_seeds;
+    // One search per texel: the supremum of the slope (relaxed: over points seen
+    // descending).
+    wk.walk.run(b, top, relaxed, all, cap, relaxed ? wk.in.relaxed : wk.in.conservative, wk.searches);
+    std::vector<ConeSearch::Point>& next = relaxed ? out_seeds.relaxed : out_seeds.conservative;
+    Mask loose = 0;
+    for (Mask q = all; q != 0; q &= q - 1) {
+      const size_t k = static_cast<size_t>(low_bit(q));
+      psi[k] = wk.searches[k].level();
+      add_seed(next, wk.searches[k].best);
+      // A relaxed cone is never narrower than the conservative one (which satisfies the
+      // relaxed condition too); where the relaxed search kept a loose bound (near a fan)
+      // the conservative search decides, up to the relaxed bound.
+      if (relaxed && wk.searches[k].bound > wk.searches[k].psi * (1 + o.tolerance)) {
+        loose |= Mask{1} << k;
+        cap[k] = psi[k];
       }
     }
+    if (loose != 0) {
+      wk.seeds = wk.in.conservative;
+      wk.seeds.insert(wk.seeds.end(), out_seeds.relaxed.begin(), out_seeds.relaxed.end());  // points above T either way
+      wk.walk.run(b, top, false, loose, cap, wk.seeds, wk.fallback);
+      for (Mask q = loose; q != 0; q &= q - 1) {
+        const size_t k = static_cast<size_t>(low_bit(q));
+        psi[k] = std::min(psi[k], wk.fallback[k].level());
+        add_seed(out_seeds.conservative, wk.fallback[k].best);
+      }
+    }
+    for (Mask q = all; q != 0; q &= q - 1) {
+      const int k = low_bit(q);
+      const int i = b.i0 + (k & (kBlock - 1)), j = b.j0 + (k >> kBlockLog);
+      const double p = psi[static_cast<size_t>(k)];
+      const double ratio = p > 0 ? 1.0 / (p * w) : kInf;  // texels -> units of u
+      out.at(i, j, 0) = field.height.at(i, j);
+      out.at(i, j, 1) = round_down(std::min(ratio, static_cast<double>(kConeRatioCap)), o.half);
+      const double t = top[static_cast<size_t>(k)];
+      out.at(i, j, 2) = o.half ? round_up_half(static_cast<float>(t)) : static_cast<float>(t);
+    }
+    // The block on the right reads from_left[bj] and the one below from_above[bi], each only
+    // after this block is done, and this block was the last to need what they held.
+    above = out_seeds;
+    left = std::move(out_seeds);
+  };
+  // Each block counts its predecessors not yet done; the last to finish feeds it.
+  std::vector<std::atomic<uint8_t>> waiting(static_cast<size_t>(blocks_x) * static_cast<size_t>(blocks_y));
+  for (int bj = 0; bj < blocks_y; ++bj)
+    for (int bi = 0; bi < blocks_x; ++bi)
+      waiting[static_cast<size_t>(bj) * static_cast<size_t>(blocks_x) + static_cast<size_t>(bi)].store(static_cast<uint8_t>((bi > 0) + (bj > 0)));
+  const std::array<std::pair<int, int>, 1> first = {{{0, 0}}};
+  tbb::parallel_for_each(first.begin(), first.end(), [&](const std::pair<int, int>& block, tbb::feeder<std::pair<int, int>>& feeder) {
+    const auto [bi, bj] = block;
+    search_block(bi, bj);
+    auto done = [&](int x, int y) {
+      if (x < blocks_x && y < blocks_y && --waiting[static_cast<size_t>(y) * static_cast<size_t>(blocks_x) + static_cast<size_t>(x)] == 0) feeder.add({x, y});
+    };
+    done(bi, bj + 1);
+    done(bi + 1, bj);
   });
 
   out.metadata = height_field_metadata(field);

@@ -52,11 +52,13 @@
 // kept. A texel no higher point can see (the top of the map, a flat map) stores kConeRatioCap.
 // Cost. Exact relaxed cones of smooth maps whose features span hundreds of texels cost more
 // than conservative ones: every crest in reach that comes within a texel's slope of the cone
-// is searched per texel (docs/benchmarks.md: 4 x 3 sine periods, 3.5x at 1024², 10x at 4096²);
-// ConeMapOptions::exact_fans = false trades those texels' width for that time.
+// is searched per texel, best-first (docs/benchmarks.md: 4 x 3 sine periods, about the
+// conservative cones' time at 1024², 1.4x at 4096²); ConeMapOptions::exact_fans = false trades
+// those texels' width for less time still.
 //
-// Determinism. Texels are searched in fixed 4 x 4 blocks, each seeded from the block before it
-// in its row of blocks: the output is the same, byte for byte, whatever the thread count. Within
+// Determinism. Texels are searched in fixed 4 x 4 blocks, each seeded from the block on its
+// left and the one above it, which are searched first (a wavefront): the output is the same,
+// byte for byte, whatever the thread count and schedule. Within
 // the tolerance it depends on the search order, so it may change (within the tolerance, never
 // wider than exact) when the search changes.
 #pragma once
@@ -83,7 +85,7 @@ struct ConeMapOptions {
   // Relaxed cones: where the apex is reached on F's side and the set seen descending fans out
   // of that point, take the supremum's limit there exactly (true), or keep a safe bound and
   // the conservative cone where that is wider (false: narrower cones at those texels, as
-  // before 2026-12-03, much faster on smooth maps whose features span hundreds of texels;
+  // before 2026-12-03, faster on smooth maps whose features span hundreds of texels;
   // docs/benchmarks.md measures both).
   bool exact_fans = true;
 };
