@@ -58,9 +58,9 @@
 //
 // Determinism. Texels are searched in fixed 4 x 4 blocks, each seeded from the block on its
 // left and the one above it, which are searched first (a wavefront): the output is the same,
-// byte for byte, whatever the thread count and schedule. Within
-// the tolerance it depends on the search order, so it may change (within the tolerance, never
-// wider than exact) when the search changes.
+// byte for byte, whatever the thread count and schedule. Within the tolerance it depends on
+// the search order, so it may change (within the tolerance, never wider than exact) when the
+// search changes.
 #pragma once
 
 #include "meso/streams/height_field.hpp"
