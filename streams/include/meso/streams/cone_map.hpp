@@ -53,7 +53,7 @@
 // Cost. Exact relaxed cones of smooth maps whose features span hundreds of texels cost more
 // than conservative ones: every crest in reach that comes within a texel's slope of the cone
 // is searched per texel, best-first (docs/benchmarks.md: 4 x 3 sine periods, about the
-// conservative cones' time at 1024², 1.4x at 4096²); ConeMapOptions::exact_fans = false trades
+// conservative cones' time at 1024², 1.5x at 4096²); ConeMapOptions::exact_fans = false trades
 // those texels' width for less time still.
 //
 // Determinism. Texels are searched in fixed 4 x 4 blocks, each seeded from the block on its
