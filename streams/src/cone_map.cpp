@@ -1783,10 +1783,10 @@ class BlockSearch {
         // The rising test when a node is made, not when it is popped: a node that rises away
         // from the block never enters the queue and its bound never competes for the order
         // (512² bumps: -9 % instructions; noise +6 %, which pops fewer of them).
-        int made = 0;
-        size_t best = 0;
+        std::array<size_t, 4> made{};  // the children kept, in order
+        size_t count_made = 0, best = 0;
         for (size_t a = 0; a < static_cast<size_t>(count); ++a) {
-          Node child = kids[a];
+          Node& child = kids[a];
           const Rect cr = node_rect(child, ox, oy);
           child.mask = rising(child.level == 0 ? leaves_.box(child.x, child.y) : gradient_box(child.level, child.x, child.y).data(), cr, b, child.mask);
           if (child.mask == 0) continue;
@@ -1794,16 +1794,18 @@ class BlockSearch {
           double lowest = kInf;  // the lowest apex of the texels it is kept for
           for (Mask q = child.mask; q != 0; q &= q - 1) lowest = std::min(lowest, top[static_cast<size_t>(low_bit(q))]);
           child.key = child.d > 0 ? (child.m - lowest) / child.d : kInf;
-          if (made > 0 && child.key > kids[best].key) best = static_cast<size_t>(made);
-          kids[static_cast<size_t>(made++)] = child;
+          if (count_made > 0 && child.key > kids[best].key) best = a;
+          if (count_made == 0) best = a;
+          made[count_made++] = a;
         }
-        for (size_t a = 0; a < static_cast<size_t>(made); ++a) {
+        if (count_made == 0) continue;
+        for (size_t u = 0; u < count_made; ++u) {
+          const size_t a = made[u];
           if (a == best) continue;
           queue_.emplace_back(kids[a].key, static_cast<uint32_t>(stack_.size()));
           stack_.push_back(kids[a]);
           std::push_heap(queue_.begin(), queue_.end());
         }
-        if (made == 0) continue;
         n = kids[best];
         held = true;
         tested = !conceded_;
