@@ -1375,8 +1375,9 @@ inline Pair pair_abs(Pair a) { return Pair{std::abs(a[0]), std::abs(a[1])}; }
 // plane_excess()'s first bound (one square root) for the texels of `texels` of the block whose
 // first texel is (i0, j0), two at a time: those it settles (the bound <= 0 with dist > 0,
 // the value plane_excess would return, from the same IEEE operations in the same order).
-// Most calls on the smooth bumps end there (87 % of those that end <= 0), so the texels of a
-// node share its centre, extents and plane, and their gaps along x per column, along y per row.
+// Most calls on the smooth bumps end there (87 % of those that end <= 0). The texels of a node
+// share its centre, extents and plane, and their gaps to it along x per column, along y per
+// row: so they are tested together, the square roots and divisions in pairs.
 Mask one_root_settles(const float* plane, const Rect& r, int i0, int j0, const std::array<double, kBlock * kBlock>& top,
                       const std::array<double, kBlock * kBlock>& psi, Mask texels) {
   const double gx = plane[1], gy = plane[2];
@@ -1632,8 +1633,8 @@ class BlockSearch {
   // leaf along the crests on the way, each leaf too little to dismiss the next (1024² bumps:
   // 7.7 s; started at their final levels, 2.3 s; best-first 3.5-3.9 s). Conservative cones
   // mostly find theirs next to the texel, where depth-first is cheaper (best-first, 256²:
-  // bumps -2 % instructions, bricks +6 %, noise +8 %). The order changes which nodes are
-  // split, never which can be dismissed: the result is the same within the tolerance.
+  // bumps -2 % instructions, bricks +6 %, noise +8 %). The order changes how much is split
+  // before the levels are reached, not the answer: it is the same within the tolerance.
   void visit(const Block& b, const PerTexel& top, const PerTexel& cap, std::vector<ConeSearch>& s, double ox, double oy, Mask mask0) {
     stack_.clear();
     queue_.clear();
@@ -1794,8 +1795,7 @@ class BlockSearch {
           double lowest = kInf;  // the lowest apex of the texels it is kept for
           for (Mask q = child.mask; q != 0; q &= q - 1) lowest = std::min(lowest, top[static_cast<size_t>(low_bit(q))]);
           child.key = child.d > 0 ? (child.m - lowest) / child.d : kInf;
-          if (count_made > 0 && child.key > kids[best].key) best = a;
-          if (count_made == 0) best = a;
+          if (count_made == 0 || child.key > kids[best].key) best = a;
           made[count_made++] = a;
         }
         if (count_made == 0) continue;
