@@ -136,14 +136,14 @@ void add_streams(CLI::App& app, Context& ctx) {
           ->check(CLI::IsMember({"exact", "bound"}))
           ->capture_default_str();
     cone->callback([&ctx, cone_args, tolerance, fans, kind] {
-      ctx.run = [&ctx, cone_args, tolerance, fans, kind](nlohmann::json& report, Progress&) {
+      ctx.run = [&ctx, cone_args, tolerance, fans, kind](nlohmann::json& report, Progress& progress) {
         const HeightField field = load_height_field(*cone_args);
         ConeMapOptions options;
         options.kind = kind;
         options.tolerance = *tolerance;
         options.half = cone_args->half;
         options.exact_fans = *fans == "exact";
-        const std::vector<Image> levels = cone_map_levels(build_cone_map(field, options));
+        const std::vector<Image> levels = cone_map_levels(build_cone_map(field, options, progress));
         OutputSet outputs;
         write_image_levels(levels, outputs.add(cone_args->output), cone_args->half ? PixelFormat::half : PixelFormat::float32);
         outputs.commit();
@@ -332,9 +332,9 @@ void add_streams(CLI::App& app, Context& ctx) {
   sdf->add_option("--relief", sdf_options->relief, "Height range in units of the map's width (the box is 1 x H/W x relief)")
       ->check(CLI::PositiveNumber & Finite);
   sdf->callback([&ctx, sdf_args, sdf_options] {
-    ctx.run = [&ctx, sdf_args, sdf_options](nlohmann::json& report, Progress&) {
+    ctx.run = [&ctx, sdf_args, sdf_options](nlohmann::json& report, Progress& progress) {
       const HeightField field = load_height_field(*sdf_args);
-      DistanceField df = build_distance_field(field, *sdf_options);
+      DistanceField df = build_distance_field(field, *sdf_options, progress);
       const int width = df.width, height = df.height, depth = df.depth;
       const float relief = df.relief;
       // Moved, not copied: at 4096² x 32 the field is 2.1 GB.

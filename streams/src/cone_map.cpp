@@ -1899,7 +1899,7 @@ void add_seed(std::vector<ConeSearch::Point>& seeds, const ConeSearch::Point& p)
   seeds.push_back(p);
 }
 
-Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
+Image build_cone_map(const HeightField& input, const ConeMapOptions& o, Progress& progress) {
   // With half output the cones are those of the heights as stored (rounded to half); a copy
   // only then (the map's size again in working memory otherwise).
   HeightField rounded;
@@ -2007,12 +2007,14 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
     // after this block is done, and this block was the last to need what they held.
     above = out_seeds;
     left = std::move(out_seeds);
+    progress.advance(1);
   };
   // Each block counts its predecessors not yet done; the last to finish feeds it.
   std::vector<std::atomic<uint8_t>> waiting(static_cast<size_t>(blocks_x) * static_cast<size_t>(blocks_y));
   for (int bj = 0; bj < blocks_y; ++bj)
     for (int bi = 0; bi < blocks_x; ++bi)
       waiting[static_cast<size_t>(bj) * static_cast<size_t>(blocks_x) + static_cast<size_t>(bi)].store(static_cast<uint8_t>((bi > 0) + (bj > 0)));
+  progress.begin(relaxed ? "relaxed cone map" : "cone map", static_cast<uint64_t>(blocks_x) * static_cast<uint64_t>(blocks_y));
   const std::array<std::pair<int, int>, 1> first = {{{0, 0}}};
   tbb::parallel_for_each(first.begin(), first.end(), [&](const std::pair<int, int>& block, tbb::feeder<std::pair<int, int>>& feeder) {
     const auto [bi, bj] = block;
@@ -2023,6 +2025,7 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o) {
     done(bi, bj + 1);
     done(bi + 1, bj);
   });
+  progress.end();
 
   out.metadata = height_field_metadata(field);
   out.metadata["quantity"] = std::string(relaxed ? "relaxed cone map" : "cone map");

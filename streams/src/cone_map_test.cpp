@@ -231,6 +231,20 @@ TEST(ConeMap, SameBytesWhateverTheThreadCount) {
   EXPECT_EQ(one.pixels, many.pixels);
 }
 
+// The bar of `meso streams cone` / `relaxed-cone`: one phase, every 4 x 4 block counted once
+// (13 x 9 texels: 4 x 3 blocks, the last row and column partial).
+TEST(ConeMap, ProgressCountsEveryBlockOnce) {
+  const HeightField f = bumps(13, 9, Border::clamp);
+  for (ConeKind kind : {ConeKind::conservative, ConeKind::relaxed}) {
+    test::CountingProgress progress;
+    build_cone_map(f, {kind, 1e-4, false}, progress);
+    EXPECT_EQ(progress.begins, 1);
+    EXPECT_EQ(progress.ends, 1);
+    EXPECT_EQ(progress.total, 12u);
+    EXPECT_EQ(progress.done.load(), 12u);
+  }
+}
+
 TEST(ConeMap, HalfStorageRoundsSafely) {
   const HeightField f = noise(12, 12, Border::clamp, 8);
   const Image half = build_cone_map(f, {ConeKind::conservative, 1e-4, true});

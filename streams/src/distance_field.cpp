@@ -13,7 +13,7 @@
 
 namespace meso {
 
-DistanceField build_distance_field(const HeightField& field, const DistanceFieldOptions& o) {
+DistanceField build_distance_field(const HeightField& field, const DistanceFieldOptions& o, Progress& progress) {
   const int w = field.height.width, h = field.height.height, d = std::max(1, o.depth);
   DistanceField df;
   df.width = w;
@@ -81,6 +81,7 @@ DistanceField build_distance_field(const HeightField& field, const DistanceField
     return Buffers{std::vector<double>(std::max(WE, HE) + 1), std::vector<float>(strips * HE * kStrip),
                    std::vector<float>(kStrip * static_cast<size_t>(h)), LowerEnvelope{}};
   });
+  progress.begin("distance field", static_cast<uint64_t>(d));
   tbb::parallel_for(tbb::blocked_range<int>(0, d), [&](const tbb::blocked_range<int>& slices) {
     Buffers& buf = buffers.local();
     std::vector<double>& line = buf.line;
@@ -133,8 +134,10 @@ DistanceField build_distance_field(const HeightField& field, const DistanceField
         for (size_t y = 0; y < static_cast<size_t>(h); ++y)
           for (size_t c = 0; c < n; ++c) slice[y * W + x0 + c] = out[c * static_cast<size_t>(h) + y];
       }
+      progress.advance(1);
     }
   });
+  progress.end();
   return df;
 }
 

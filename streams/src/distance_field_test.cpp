@@ -93,6 +93,19 @@ INSTANTIATE_TEST_SUITE_P(Maps, SdfExact,
                                            SdfCase{64, 64, 8, 0.2f, Border::clamp, SdfMap::spike}),
                          sdf_case_name);
 
+// The bar of `meso streams sdf`: one phase, one unit per slice.
+TEST(Sdf, ProgressCountsEverySlice) {
+  const HeightField f = bumps(12, 7, Border::wrap);
+  DistanceFieldOptions o;
+  o.depth = 5;
+  test::CountingProgress progress;
+  build_distance_field(f, o, progress);
+  EXPECT_EQ(progress.begins, 1);
+  EXPECT_EQ(progress.ends, 1);
+  EXPECT_EQ(progress.total, 5u);
+  EXPECT_EQ(progress.done.load(), 5u);
+}
+
 TEST(Sdf, FlatMapIsTheHeightAboveIt) {
   const HeightField f = make_height_field(Image(8, 4, 1, 0.3f), Border::clamp);  // flat: all 0
   DistanceFieldOptions o;

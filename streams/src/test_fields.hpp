@@ -2,9 +2,12 @@
 // bench/streams.cpp includes it too, for its brute-force mode).
 #pragma once
 
+#include "meso/core/progress.hpp"
 #include "meso/streams/height_field.hpp"
 
 #include <algorithm>
+#include <atomic>
+#include <cstdint>
 #include <cmath>
 #include <functional>
 #include <random>
@@ -26,6 +29,19 @@
 #endif
 
 namespace meso::test {
+
+// Records what a long operation reports: its phases, their totals, and the units advanced.
+struct CountingProgress final : Progress {
+  int begins = 0, ends = 0;
+  uint64_t total = 0;
+  std::atomic<uint64_t> done{0};
+  void begin(const std::string&, uint64_t t) override {
+    ++begins;
+    total += t;
+  }
+  void advance(uint64_t units) override { done += units; }
+  void end() override { ++ends; }
+};
 
 // A w x h field from f(x, y), normalised by make_height_field.
 inline HeightField field_from(int w, int h, Border border, const std::function<float(int, int)>& f) {

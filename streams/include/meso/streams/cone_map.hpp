@@ -63,6 +63,7 @@
 // search changes.
 #pragma once
 
+#include "meso/core/progress.hpp"
 #include "meso/streams/height_field.hpp"
 #include "meso/streams/height_ray.hpp"
 
@@ -93,7 +94,8 @@ struct ConeMapOptions {
 // Channels per texel: 0 = the texel's height (as read by GL_LINEAR to form S), 1 = the cone
 // ratio (units of u per unit height), 2 = the apex height T_p. Metadata: the height field's
 // plus quantity, kind, channels, ratio_units, texels_per_u.
-Image build_cone_map(const HeightField& field, const ConeMapOptions& options);
+// `progress` counts 4 x 4 blocks of texels as they are done.
+Image build_cone_map(const HeightField& field, const ConeMapOptions& options, Progress& progress = null_progress());
 
 // The MIP chain of a cone map (OpenGL sizes, as build_min_max_pyramid): a coarse texel takes
 // the maximum height and apex and the minimum ratio of every finer texel its footprint

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "meso/core/huge_pages.hpp"
+#include "meso/core/progress.hpp"
 #include "meso/streams/height_field.hpp"
 
 #include <vector>
@@ -39,7 +40,8 @@ struct DistanceField {
   }
 };
 
-DistanceField build_distance_field(const HeightField& field, const DistanceFieldOptions& options);
+// `progress` counts slices as they are done.
+DistanceField build_distance_field(const HeightField& field, const DistanceFieldOptions& options, Progress& progress = null_progress());
 
 // The field as one image, as `meso streams sdf` writes it: width W, height H * D, slice k in
 // rows [k H, (k+1) H), slice 0 the lowest, one channel; metadata: the height field's
