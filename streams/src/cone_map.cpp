@@ -1638,9 +1638,10 @@ class BlockSearch {
   // seen descending is often a far crest, and searched nearest first the levels rose leaf by
   // leaf along the crests on the way, each leaf too little to dismiss the next (1024² bumps:
   // 7.7 s; started at their final levels, 2.3 s; best-first 3.5-3.9 s). Conservative cones
-  // mostly find theirs next to the texel, where depth-first is cheaper (best-first, 256²:
-  // bumps -2 % instructions, bricks +6 %, noise +8 %). The order changes how much is split
-  // before the levels are reached, not the answer: it is the same within the tolerance.
+  // mostly find theirs next to the texel, where depth-first is cheaper (best-first, 256², with
+  // the wavefront: bumps +5 % instructions, bricks +7 %, noise +8 %). The order changes how
+  // much is split before the levels are reached, not the answer: it is the same within the
+  // tolerance.
   void visit(const Block& b, const PerTexel& top, const PerTexel& cap, std::vector<ConeSearch>& s, double ox, double oy, Mask mask0) {
     stack_.clear();
     queue_.clear();
@@ -1789,7 +1790,7 @@ class BlockSearch {
       if (relaxed_) {
         // The rising test when a node is made, not when it is popped: a node that rises away
         // from the block never enters the queue and its bound never competes for the order
-        // (512² bumps: -9 % instructions; noise +6 %, which pops fewer of them).
+        // (bumps at 512²: -9 % instructions; noise at 256²: +6 %, as it pops fewer of them).
         std::array<size_t, 4> made{};  // the children kept, in order
         size_t count_made = 0, best = 0;
         for (size_t a = 0; a < static_cast<size_t>(count); ++a) {
