@@ -1548,11 +1548,11 @@ class BlockSearch {
     int level, x, y;
     float m;    // the node's maximum
     Mask mask;  // the block's texels for which it may hold a steeper point
-    double d;   // distance to the block's footprint
+    double d2;  // squared distance to the block's footprint (orders nodes; no square root)
     // The squared gaps from the block's columns and rows to the node, computed once by the
     // parent (which needs them to test it) for the test when it is popped.
     Gaps gx2, gy2;
-    // Relaxed cones: the node's priority (the largest (m - T) / d over the block) and whether
+    // Relaxed cones: the node's priority (the largest (m - T) / d over the block, squared) and whether
     // `mask` has been through the rising test (done when a node is made, see visit()).
     double key = 0;
     bool rose = false;
@@ -1645,7 +1645,8 @@ class BlockSearch {
   void visit(const Block& b, const PerTexel& top, const PerTexel& cap, std::vector<ConeSearch>& s, double ox, double oy, Mask mask0) {
     stack_.clear();
     queue_.clear();
-    stack_.push_back({root_, 0, 0, static_cast<float>(global_max_), mask0, rect_distance(Rect{ox, oy, ox + w_, oy + h_}, b.f),
+    const double root_d = rect_distance(Rect{ox, oy, ox + w_, oy + h_}, b.f);
+    stack_.push_back({root_, 0, 0, static_cast<float>(global_max_), mask0, root_d * root_d,
                       squared_gaps(b.i0, ox, ox + w_), squared_gaps(b.j0, oy, oy + h_)});
     if (relaxed_) queue_.emplace_back(0.0, 0u);  // stack_ holds the nodes, queue_ their order
     PerTexel level2{};
@@ -1784,7 +1785,7 @@ class BlockSearch {
         if (kid[u] != 0) {
           const size_t ux = u & 1, uy = u >> 1;
           kids[static_cast<size_t>(count++)] = Node{l, cx0 + static_cast<int>(ux), cy0 + static_cast<int>(uy), static_cast<float>(km[u]), kid[u],
-                                                    length(bgx[ux], bgy[uy]), kgx2[ux], kgy2[uy]};
+                                                    bgx[ux] * bgx[ux] + bgy[uy] * bgy[uy], kgx2[ux], kgy2[uy]};
         }
       if (count == 0) continue;
       if (relaxed_) {
@@ -1801,7 +1802,8 @@ class BlockSearch {
           child.rose = true;
           double lowest = kInf;  // the lowest apex of the texels it is kept for
           for (Mask q = child.mask; q != 0; q &= q - 1) lowest = std::min(lowest, top[static_cast<size_t>(low_bit(q))]);
-          child.key = child.d > 0 ? (child.m - lowest) / child.d : kInf;
+          const double rise = child.m - lowest;  // > 0: steeper() kept the texels
+          child.key = child.d2 > 0 ? rise * rise / child.d2 : kInf;  // the bound, squared
           if (count_made == 0 || child.key > kids[best].key) best = a;
           made[count_made++] = a;
         }
@@ -1822,7 +1824,7 @@ class BlockSearch {
       // indices: a node is 96 bytes).
       std::array<size_t, 4> order = {0, 1, 2, 3};
       for (size_t a = 1; a < static_cast<size_t>(count); ++a)
-        for (size_t c = a; c > 0 && kids[order[c - 1]].d < kids[order[c]].d; --c) std::swap(order[c - 1], order[c]);
+        for (size_t c = a; c > 0 && kids[order[c - 1]].d2 < kids[order[c]].d2; --c) std::swap(order[c - 1], order[c]);
       for (size_t k = 0; k + 1 < static_cast<size_t>(count); ++k) stack_.push_back(kids[order[k]]);
       n = kids[order[static_cast<size_t>(count - 1)]];
       held = true;
