@@ -1163,28 +1163,9 @@ bool rises_away(const float* box, const Rect& r, const Rect& f) {
 // reaches the boundary anyway). Along an edge, dist is |x - e| beside F or
 // sqrt((x - e)^2 + k^2) off its corner: the maximum of gx x - psi sqrt((x - e)^2 + k^2) is at
 // x - e = k r / sqrt(1 - r^2), r = gx / psi, when |r| < 1; else at an end.
-// one_root_done: the caller has made the first bound below (one_root_settles) and it did not
-// settle the call.
-double plane_excess(const float* plane, const Rect& r, const Rect& f, double top, double psi, bool one_root_done = false) {
+double plane_excess(const float* plane, const Rect& r, const Rect& f, double top, double psi) {
   const double a = plane[0] - top, gx = plane[1], gy = plane[2];
   const double ncx = 0.5 * (r.x0 + r.x1), ncy = 0.5 * (r.y0 + r.y1);
-  // First a bound with one square root, which settles most calls (the caller compares the
-  // answer with 0 only): dist(y, F) >= n . (y - p) for p the point of F nearest r's centre
-  // and n the unit direction from p to that centre (F is convex and n lies in its normal cone
-  // at p), so h(y) <= a + g . (y - centre) - psi n . (y - p), an affine function whose maximum
-  // over r is its value at the centre plus the half-extents times the absolute slopes. Tight
-  // to first order in r's angular size seen from F, the regime in which planes are tested.
-  // (Smooth bumps at 512²: 87 % of the calls that end <= 0 end here; 256²: -25 % instructions,
-  // bricks -3 %, noise +2 %.)
-  if (!one_root_done) {
-    const double dx = ncx - std::clamp(ncx, f.x0, f.x1), dy = ncy - std::clamp(ncy, f.y0, f.y1);
-    const double d = length(dx, dy);
-    if (d > 0) {
-      const double nx = dx / d, ny = dy / d;
-      const double bound = a - psi * d + std::abs(gx - psi * nx) * 0.5 * (r.x1 - r.x0) + std::abs(gy - psi * ny) * 0.5 * (r.y1 - r.y0);
-      if (bound <= 0) return bound;
-    }
-  }
   // Inlined (up to 16 copies): left to GCC, the choice flips with the size of unrelated code
   // in this file, and the call cost 13 % more instructions in the plane tests.
   auto h = [&](double x, double y) __attribute__((always_inline)) {
@@ -1378,12 +1359,18 @@ inline Pair pair_sqrt(Pair a) {
 }
 inline Pair pair_abs(Pair a) { return Pair{std::abs(a[0]), std::abs(a[1])}; }
 
-// plane_excess()'s first bound (one square root) for the texels of `texels` of the block whose
-// first texel is (i0, j0), two at a time: those it settles (the bound <= 0 with dist > 0,
-// the value plane_excess would return, from the same IEEE operations in the same order).
-// Most calls on the smooth bumps end there (87 % of those that end <= 0). The texels of a node
-// share its centre, extents and plane, and their gaps to it along x per column, along y per
-// row: so they are tested together, the square roots and divisions in pairs.
+// A first plane test with one square root, for the texels of `texels` of the block whose first
+// texel is (i0, j0): those it settles (h <= 0 over r, so plane_excess would answer <= 0).
+// dist(y, F) >= n . (y - p) for p the point of F nearest r's centre and n the unit direction
+// from p to that centre (F is convex and n lies in its normal cone at p), so h(y) <= a +
+// g . (y - centre) - psi n . (y - p), an affine function whose maximum over r is its value at
+// the centre plus the half-extents times the absolute slopes. Tight to first order in r's
+// angular size seen from F, the regime in which planes are tested: on the smooth bumps at
+// 512² it settles 87 % of the tests that end <= 0 (256²: -25 % instructions, bricks -3 %,
+// noise +2 %, against none). The texels of a node share its centre, extents and plane, and
+// their gaps to it along x per column, along y per row: so they are tested together, the
+// square roots and divisions in pairs (-6.6 % instructions on the bumps against one texel
+// at a time, the same verdicts).
 Mask one_root_settles(const float* plane, const Rect& r, int i0, int j0, const std::array<double, kBlock * kBlock>& top,
                       const std::array<double, kBlock * kBlock>& psi, Mask texels) {
   const double gx = plane[1], gy = plane[2];
@@ -1552,17 +1539,15 @@ class BlockSearch {
     // The squared gaps from the block's columns and rows to the node, computed once by the
     // parent (which needs them to test it) for the test when it is popped.
     Gaps gx2, gy2;
-    // Relaxed cones: the node's priority (the largest (m - T) / d over the block, squared) and whether
-    // `mask` has been through the rising test (done when a node is made, see visit()).
+    // Relaxed cones: the node's priority (the largest (m - T) / d over the block, squared).
     double key = 0;
-    bool rose = false;
   };
 
   // Under the cone of the slope found: nothing to gain. Under the cone of that slope
   // widened by the tolerance: the node is dismissed and the widened slope kept as the
   // bound (the stored cone may be that much narrower, never wider).
-  bool under(ConeSearch& s, const float* plane, const Rect& r, const Rect& f, double t, bool one_root_done) {
-    const double level = s.level(), excess = plane_excess(plane, r, f, t, level, one_root_done);
+  bool under(ConeSearch& s, const float* plane, const Rect& r, const Rect& f, double t) {
+    const double level = s.level(), excess = plane_excess(plane, r, f, t, level);
     if (excess <= 0) return true;
     const double widened = s.psi * (1 + tol_);
     if (!(widened > s.bound)) return false;
@@ -1597,7 +1582,7 @@ class BlockSearch {
     keep &= ~settled;
     for (Mask q = tested & ~settled; q != 0; q &= q - 1) {
       const size_t k = static_cast<size_t>(low_bit(q));
-      if (under(s[k], plane, r, footprint_[k], top[k], true)) keep &= ~(Mask{1} << k);
+      if (under(s[k], plane, r, footprint_[k], top[k])) keep &= ~(Mask{1} << k);
     }
     return keep;
   }
@@ -1706,7 +1691,8 @@ class BlockSearch {
         // smooth bumps -15 %). (The tree keeps its planes: the conservative search that
         // relaxed cones fall back to where a bound stayed loose tests them.)
         if (relaxed_) {
-          if (!n.rose) keep = rising(gradient_box(n.level, n.x, n.y).data(), r, b, keep);
+          // Every node but the root had its rising test when it was made (below).
+          if (n.level == root_) keep = rising(gradient_box(n.level, n.x, n.y).data(), r, b, keep);
         } else {
           keep = planes(&tree_.plane[static_cast<size_t>(n.level)][index * 3], r, b, top, s, keep, apart);
         }
@@ -1735,7 +1721,7 @@ class BlockSearch {
         // them: without them the bricks took 2.4 % fewer instructions but the smooth bumps 13 %
         // more (there the surface hugs the cone and the pieces' bounds close late).
         if (relaxed_) {
-          if (!n.rose) keep = rising(leaves_.box(n.x, n.y), r, b, keep);
+          if (n.level == root_) keep = rising(leaves_.box(n.x, n.y), r, b, keep);
         } else {
           apart &= ~whole;
           if (apart != 0) keep = planes(leaves_.plane(n.x, n.y), r, b, top, s, keep, apart);
@@ -1799,7 +1785,6 @@ class BlockSearch {
           const Rect cr = node_rect(child, ox, oy);
           child.mask = rising(child.level == 0 ? leaves_.box(child.x, child.y) : gradient_box(child.level, child.x, child.y).data(), cr, b, child.mask);
           if (child.mask == 0) continue;
-          child.rose = true;
           double lowest = kInf;  // the lowest apex of the texels it is kept for
           for (Mask q = child.mask; q != 0; q &= q - 1) lowest = std::min(lowest, top[static_cast<size_t>(low_bit(q))]);
           const double rise = child.m - lowest;  // > 0: steeper() kept the texels
