@@ -325,7 +325,7 @@ class ConeSearch {
     if (!q.valid || q.v <= top_) return;
     // Most seeds are no steeper than psi: (v - T)^2 well below psi^2 d^2 says so without the
     // square root and the division (the margin, far above their rounding, leaves every
-    // borderline seed to the exact test below; 32 seeds a texel since the wavefront).
+    // borderline seed to the exact test below; up to 32 seeds a texel since the wavefront).
     const double gx = gap(f_.x0, f_.x1, q.x, q.x), gy = gap(f_.y0, f_.y1, q.y, q.y);
     const double rise = q.v - top_;
     if (rise * rise < psi * psi * (gx * gx + gy * gy) * (1 - 1e-9)) return;
