@@ -53,8 +53,8 @@
 // Cost. Exact relaxed cones of smooth maps whose features span hundreds of texels cost more
 // than conservative ones: every crest in reach that comes within a texel's slope of the cone
 // is searched per texel, best-first (docs/benchmarks.md: 4 x 3 sine periods, about the
-// conservative cones' time at 1024², 1.5x at 4096²); ConeMapOptions::exact_fans = false trades
-// those texels' width for less time still.
+// conservative cones' time at 1024², 1.3x at 4096²); ConeMapOptions::exact_fans = false trades
+// those texels' width for less time still (half the exact time at 4096²).
 //
 // Determinism. Texels are searched in fixed 4 x 4 blocks, each seeded from the block on its
 // left and the one above it, which are searched first (a wavefront): the output is the same,
