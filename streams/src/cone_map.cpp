@@ -114,7 +114,9 @@ inline Pair load_pair(const double* p) {
   std::memcpy(&v, p, sizeof v);
   return v;
 }
-// max(a, b) per texel (where they differ only in the sign of a zero the results square alike).
+// max(a, b) per lane. Where a and b differ only in the sign of a zero, either may come back
+// (as with pair_min): each use here squares the result, compares it with 0, or adds it to a
+// nonzero value, none of which sees that sign.
 inline Pair pair_max(Pair a, Pair b) {
 #if defined(__SSE2__)
   return _mm_max_pd(a, b);
