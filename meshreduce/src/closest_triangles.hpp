@@ -91,6 +91,7 @@ class ClosestTriangles {
   ClosestTriangles& operator=(const ClosestTriangles&) = delete;
 
   bool empty() const { return tris_.empty(); }
+  const Triangle& triangle(int64_t i) const { return tris_[static_cast<size_t>(i)]; }
 
   // The squared distance from p to the nearest triangle and that triangle's index (infinity
   // and -1 for an empty set). `hint`, a triangle likely to be near (e.g. the previous
@@ -151,5 +152,29 @@ class ClosestTriangles {
   RTCDevice device_ = nullptr;
   RTCScene scene_ = nullptr;
 };
+
+// Whether triangle (a, b, c), of normal n, faces away from the set's surface under it: the
+// cosine between n and the summed (area-weighted) normals of the set's triangles nearest to
+// the centroids of its k x k subdivision (k its longest edge over `mean_edge`, 2 to 16) is
+// below `min_cos`. With min_cos 0 this is a flip as bench/meshreduce_peers counts it (there
+// k goes up to 64); a face nearly perpendicular to the input is on the edge of that count,
+// where the nearest of two equidistant triangles decides, hence the callers' margin.
+inline bool faces_away(const ClosestTriangles& set, const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& n, double mean_edge,
+                       double min_cos) {
+  const double longest = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
+  const int k = static_cast<int>(std::clamp(std::ceil(longest / mean_edge), 2.0, 16.0));
+  Vec3d m(0, 0, 0);
+  int64_t hint = -1;
+  for (int up = 1; up <= 2; ++up)  // upright sub-triangles, then the inverted ones
+    for (int i = 0; i + up <= k; ++i)
+      for (int j = 0; i + j + up <= k; ++j) {
+        const double u = (i + up / 3.0) / k, v = (j + up / 3.0) / k;
+        hint = set.nearest(a + u * (b - a) + v * (c - a), hint).second;
+        if (hint < 0) return false;
+        const Triangle& t = set.triangle(hint);
+        m += OpenMesh::cross(t.b - t.a, t.c - t.a);
+      }
+  return OpenMesh::dot(n, m) < min_cos * n.norm() * m.norm();
+}
 
 }  // namespace meso::reduce

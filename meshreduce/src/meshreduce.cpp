@@ -99,7 +99,7 @@ std::vector<uint8_t> fit_fixed_vertices(const Mesh& mesh, const ReduceOptions& o
 
 // One reduction with the given face-plane weighting (LoopOptions::uniform_planes).
 Mesh reduce_once(const Mesh& input, const ReduceOptions& options, bool uniform_planes, ReduceReport* report,
-                 Progress& progress, ProgressiveMesh* progressive) {
+                 Progress& progress, ProgressiveMesh* progressive, reduce::InputSurface* surface = nullptr) {
   using namespace reduce;
   const auto t0 = std::chrono::steady_clock::now();
   Mesh mesh;
@@ -152,7 +152,7 @@ Mesh reduce_once(const Mesh& input, const ReduceOptions& options, bool uniform_p
     loop.add(std::make_unique<ChartGuard>(loop, options.boundary_tolerance * diagonal, options.seam_tolerance * diagonal,
                                           options.uv_tolerance));
     if (lo.has_uvs) loop.add(std::make_unique<UvFoldGuard>());
-    loop.add(std::make_unique<NoFlip>());
+    loop.add(std::make_unique<NoFlip>(surface));
     if (options.max_normal_deviation < 180.0f) loop.add(std::make_unique<NormalDeviation>(options.max_normal_deviation));
     if (options.max_aspect_ratio > 0.0f) loop.add(std::make_unique<AspectRatioGuard>(loop, options.max_aspect_ratio));
     ErrorBound* bound = nullptr;
@@ -200,9 +200,10 @@ Mesh reduce_mesh(const Mesh& input, const ReduceOptions& options, ReduceReport* 
   const bool fit = !progressive && options.max_normal_deviation >= 180.0f;
   std::unique_ptr<SurfaceDistanceReference> reference;
   std::unique_ptr<reduce::SurfaceFitTarget> target;
+  reduce::InputSurface surface;  // the flip guard's, shared by the two reductions
   tbb::parallel_invoke(
-      [&] { outputs[0] = reduce_once(input, options, false, &reports[0], progress, progressive ? &records[0] : nullptr); },
-      [&] { outputs[1] = reduce_once(input, options, true, &reports[1], null_progress(), progressive ? &records[1] : nullptr); },
+      [&] { outputs[0] = reduce_once(input, options, false, &reports[0], progress, progressive ? &records[0] : nullptr, &surface); },
+      [&] { outputs[1] = reduce_once(input, options, true, &reports[1], null_progress(), progressive ? &records[1] : nullptr, &surface); },
       [&] { reference = std::make_unique<SurfaceDistanceReference>(input); },
       [&] {
         if (fit) target = std::make_unique<reduce::SurfaceFitTarget>(input);

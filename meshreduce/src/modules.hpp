@@ -3,6 +3,7 @@
 // old corner positions and UVs, and the new position q and UVs.
 #pragma once
 
+#include "closest_triangles.hpp"
 #include "collapse_loop.hpp"
 #include "geometry.hpp"
 
@@ -11,6 +12,8 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <memory>
+#include <mutex>
 #include <utility>
 #include <vector>
 
@@ -98,7 +101,17 @@ class UvFoldGuard final : public CollapseModule {
   }
 };
 
-// No face normal flips and no new degenerate face. Two tests per face of the fan:
+// The input surface that NoFlip tests steep faces against: its triangles and their BVH, in
+// the loop's normalised coordinates, built by the first module that needs them. Reductions of
+// the same input normalise it the same way, so `best`'s two share one (on a 2M-face wall the
+// structure is about 0.45 GB).
+struct InputSurface {
+  std::once_flag built;
+  std::vector<Triangle> triangles;
+  std::unique_ptr<ClosestTriangles> nearest;
+};
+
+// No face normal flips and no new degenerate face. Tests per face of the fan:
 //  - against its normal before this collapse (dot > 0), the classic test;
 //  - against the input surface the face stands for: the sum of the area-weighted normals
 //    (cross products) of the input faces merged into it, each removed face's share going
@@ -106,19 +119,40 @@ class UvFoldGuard final : public CollapseModule {
 //    did), so the sums over the mesh stay the input's. The first test alone lets a face
 //    turn by up to 90 degrees per collapse, and turns add up: on the brick wall a few faces
 //    ended up facing against the surface they replace (cos -0.29 and -0.75 against the mean
-//    normal of the input nearest to them; docs/benchmarks.md).
+//    normal of the input nearest to them; docs/benchmarks.md);
+//  - a face more than 60 degrees from that sum, against the input triangles nearest to
+//    samples over it (faces_away in closest_triangles.hpp, with a margin: refused past 84
+//    degrees). Over steep relief the sum can hold enough of the flanks (of bricks) to pass a
+//    face that faces away from the input under it (docs/benchmarks.md, "steep faces").
 class NoFlip final : public CollapseModule {
  public:
+  // `shared`: an InputSurface to use (and build, if no one has yet); null: one of its own.
+  explicit NoFlip(InputSurface* shared = nullptr) : surface_(shared) {
+    if (!surface_) {
+      own_ = std::make_unique<InputSurface>();
+      surface_ = own_.get();
+    }
+  }
+
   const char* name() const override { return "normal_flip"; }
 
   void initialize(CollapseLoop& loop) override {
     const Mesh& m = loop.mesh();
     input_.assign(m.n_faces(), Vec3d(0, 0, 0));
+    corners_.assign(m.n_faces(), {0, 0, 0});
+    double edges = 0;
     for (auto f : m.faces()) {
       const auto hs = face_halfedges(m, f);
       const Vec3d& a = loop.pos(m.to_vertex_handle(hs[0]));
       input_[static_cast<size_t>(f.idx())] = OpenMesh::cross(loop.pos(m.to_vertex_handle(hs[1])) - a, loop.pos(m.to_vertex_handle(hs[2])) - a);
+      for (size_t k = 0; k < 3; ++k) {
+        corners_[static_cast<size_t>(f.idx())][k] = m.to_vertex_handle(hs[k]).idx();
+        edges += (loop.pos(m.to_vertex_handle(hs[k])) - loop.pos(m.to_vertex_handle(hs[(k + 1) % 3]))).norm();
+      }
     }
+    points_.resize(m.n_vertices());
+    for (auto v : m.vertices()) points_[static_cast<size_t>(v.idx())] = loop.pos(v);
+    mean_edge_ = m.n_faces() > 0 ? edges / (3.0 * static_cast<double>(m.n_faces())) : 1.0;
   }
 
   bool allow(const Candidate& c) override {
@@ -136,6 +170,9 @@ class NoFlip final : public CollapseModule {
       // Facing against its input (also a face that was degenerate); where the input's normals
       // cancel out (a sum of zero: a thin fold), nothing to face.
       if (OpenMesh::dot(n1, input) < 0) return false;
+      // Steep against that sum: against the input under it, refused from 84 degrees on (cos
+      // 0.1), a margin over the flip itself that the fit of `best` (surface_fit.cpp) relies on.
+      if (OpenMesh::dot(n1, input) < 0.5 * n1.norm() * input.norm() && faces_away(c.q, f.b, f.c, n1)) return false;
       const Vec3d n0 = old_normal(f);
       if (!(n0.sqrnorm() > 0)) continue;  // already degenerate: cannot get worse
       // Degenerate: sin of the corner angle at q below 1e-9.
@@ -151,8 +188,27 @@ class NoFlip final : public CollapseModule {
   }
 
  private:
+  // faces_away() against the input, whose triangles and BVH are built for the first face
+  // that needs them.
+  bool faces_away(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& n) {
+    std::call_once(surface_->built, [&] {
+      surface_->triangles.reserve(corners_.size());
+      for (const auto& t : corners_)
+        surface_->triangles.push_back(
+            Triangle{points_[static_cast<size_t>(t[0])], points_[static_cast<size_t>(t[1])], points_[static_cast<size_t>(t[2])]});
+      surface_->nearest = std::make_unique<ClosestTriangles>(surface_->triangles);
+    });
+    return reduce::faces_away(*surface_->nearest, a, b, c, n, mean_edge_, 0.1);
+  }
+
   std::vector<Vec3d> input_;   // per face: the summed area-weighted normals of its input faces
   std::vector<Vec3d> merged_;  // allow()'s sums for the fan, kept for commit()
+  // The input surface (normalised coordinates), for faces_away().
+  std::vector<Vec3d> points_;
+  std::vector<std::array<int, 3>> corners_;
+  double mean_edge_ = 1;
+  InputSurface* surface_;
+  std::unique_ptr<InputSurface> own_;
 };
 
 // Normal cones per face (OpenMesh's ModNormalDeviation): every face keeps the cone of the

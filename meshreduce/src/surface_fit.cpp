@@ -76,6 +76,7 @@ struct SurfaceFitTarget::Impl {
   std::vector<Vec3d> normals;  // of the input at each point (unit; area-weighted at vertices)
   std::vector<Triangle> triangles;  // non-degenerate ones
   std::unique_ptr<ClosestTriangles> tree;
+  double mean_edge = 1;  // of those triangles
 };
 
 SurfaceFitTarget::SurfaceFitTarget(const Mesh& input) : impl_(std::make_unique<Impl>()) {
@@ -109,6 +110,9 @@ SurfaceFitTarget::SurfaceFitTarget(const Mesh& input) : impl_(std::make_unique<I
     s.normals.push_back(n.sqrnorm() > 0 ? Vec3d(n / n.norm()) : Vec3d(0, 0, 0));
   }
   s.tree = std::make_unique<ClosestTriangles>(s.triangles);
+  double edges = 0;
+  for (const Triangle& t : s.triangles) edges += (t.b - t.a).norm() + (t.c - t.b).norm() + (t.a - t.c).norm();
+  if (!s.triangles.empty()) s.mean_edge = edges / (3.0 * static_cast<double>(s.triangles.size()));
 }
 
 SurfaceFitTarget::~SurfaceFitTarget() = default;
@@ -392,6 +396,34 @@ SurfaceFitReport fit_to_surface(Mesh& mesh, const SurfaceFitTarget& target, cons
     pos = std::move(next);
   }
   pos = std::move(best_pos);
+  // Last, the steep faces (over 60 degrees from the input's mean normal under them) against
+  // the input triangles nearest samples over them (faces_away, the bench's measure of a flip,
+  // with a margin: past 84 degrees). The checks above test the centroid only: a face that
+  // now faces away and did not before the fit gets its corners back where the fit found
+  // them. So does any face that this makes unacceptable (every state the iterations kept is
+  // acceptable against the original positions: each check bounds a face by its state before
+  // and the original), until none is left (each round puts back at least one vertex).
+  auto steep_away = [&](const std::vector<Vec3d>& at, size_t f, double min_cos) {
+    const FaceCorners& fc = faces[f];
+    const Vec3d n = normal_of(at, fc);
+    const Vec3d& m = facing[f].own;
+    if (!(m.sqrnorm() > 0) || OpenMesh::dot(n, m) >= 0.5 * n.norm()) return false;
+    return faces_away(*in.tree, at[static_cast<size_t>(fc.v[0])], at[static_cast<size_t>(fc.v[1])], at[static_cast<size_t>(fc.v[2])], n, in.mean_edge, min_cos);
+  };
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (size_t f = 0; f < faces.size(); ++f) {
+      if (acceptable(original, original, pos, faces[f], facing[f], options.max_aspect_ratio) && (!steep_away(pos, f, 0.1) || steep_away(original, f, 0.0)))
+        continue;
+      for (const int v : faces[f].v) {
+        const size_t vi = static_cast<size_t>(v);
+        if (pos[vi] == original[vi]) continue;
+        pos[vi] = original[vi];
+        ++rep.held_back;
+        changed = true;
+      }
+    }
+  }
   for (size_t i = 0; i < nv; ++i)
     if (unknown[i] >= 0)  // exactly representable: rounded to float above
       mesh.set_point(VertexHandle(static_cast<int>(i)), Vec3f(static_cast<float>(pos[i][0]), static_cast<float>(pos[i][1]), static_cast<float>(pos[i][2])));
