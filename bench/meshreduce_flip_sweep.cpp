@@ -1,0 +1,44 @@
+// Flipped faces of meso's reductions of the brick wall, over budgets and presets, counted as
+// bench/meshreduce_peers counts them (bench::count_flipped: a face's normal against the
+// input triangles nearest to samples spread over it).
+//   meshreduce_flip_sweep COLUMNS ROWS FACES...      e.g. 64 32 100 200 400 600 1000
+// One line per (budget, preset); exit 1 when any face is flipped or degenerate.
+#include "meshreduce_cgal_peer.hpp"
+#include "meso/examples/brick_wall.hpp"
+#include "meso/meshreduce/meshreduce.hpp"
+#include "meso/meshreduce/surface_distance.hpp"
+
+#include <cstdio>
+#include <cstdlib>
+
+int main(int argc, char** argv) {
+  using namespace meso;
+  if (argc < 4) {
+    std::fprintf(stderr, "usage: meshreduce_flip_sweep COLUMNS ROWS FACES...\n");
+    return 2;
+  }
+  BrickWallOptions wall;
+  wall.columns = std::atoi(argv[1]);
+  wall.rows = std::atoi(argv[2]);
+  if (wall.columns < 1 || wall.rows < 1) {
+    std::fprintf(stderr, "meshreduce_flip_sweep: COLUMNS and ROWS must be positive\n");
+    return 2;
+  }
+  const Mesh high = make_brick_wall(wall);
+  const TriangleSoup input = triangle_soup(high);
+  bool any = false;
+  for (int a = 3; a < argc; ++a) {
+    ReduceOptions o;
+    o.target_faces = std::strtoul(argv[a], nullptr, 10);
+    for (const auto& [name, quality] : {std::pair{"fast", ReduceQuality::fast}, std::pair{"balanced", ReduceQuality::balanced},
+                                        std::pair{"best", ReduceQuality::best}}) {
+      o.quality = quality;
+      const Mesh low = reduce_mesh(high, o);
+      const bench::FlipCount c = bench::count_flipped(input, triangle_soup(low));
+      std::printf("%d x %d wall, target %zu, %s: %zu faces, %zu flipped, %zu degenerate\n", wall.columns, wall.rows, o.target_faces, name,
+                  static_cast<size_t>(low.n_faces()), c.flipped, c.degenerate);
+      any = any || c.flipped > 0 || c.degenerate > 0;
+    }
+  }
+  return any ? 1 : 0;
+}
