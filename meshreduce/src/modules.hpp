@@ -103,8 +103,8 @@ class UvFoldGuard final : public CollapseModule {
 
 // The input surface that NoFlip tests steep faces against: its triangles and their BVH, in
 // the loop's normalised coordinates, built by the first module that needs them. Reductions of
-// the same input normalise it the same way, so `best`'s two share one (on a 2M-face wall the
-// structure is about 0.45 GB).
+// the same input normalise it the same way, so `best`'s two share one (on a 2M-face wall,
+// sharing it lowered `best`'s peak from 3.27 to 2.86 GB).
 struct InputSurface {
   std::once_flag built;
   std::vector<Triangle> triangles;
