@@ -1198,15 +1198,16 @@ MaxTree max_tree(std::vector<float> top, const HalfGrid& grid, int width, int he
 // corner x of F, with the gradient anywhere in its box (interval products, so safe). Per
 // corner of F the two terms' minima are added; the smallest sum over F's corners is the sum
 // of the smaller term along each axis (rounding is monotone: the same verdict).
-// lowest_term: along one axis, the smallest g (y - x) for g in [g0, g1], y in [r0, r1], x in
-// [f0, f1]: bilinear in g and in the offset y - x, whose extremes are r0 - f1 and r1 - f0,
-// so the four products at the extremes bound the others (rounding monotone again).
-inline double lowest_term(double g0, double g1, double r0, double r1, double f0, double f1) {
-  const double d0 = r0 - f1, d1 = r1 - f0;
-  return std::min(std::min(g0 * d0, g0 * d1), std::min(g1 * d0, g1 * d1));
-}
+// The lowest term along one axis: the smallest g (y - x) for g in [g0, g1], y in [r0, r1],
+// x in [f0, f1], bilinear in g and in the offset y - x, whose extremes are r0 - f1 and
+// r1 - f0, so the four products at the extremes bound the others (rounding monotone again).
+// Both axes' terms in one SSE2 pair (x in lane 0, y in lane 1; a minimum of equal products
+// may keep the other's zero sign, which no sum's sign depends on).
 bool rises_away(const float* box, const Rect& r, const Rect& f) {
-  return !(lowest_term(box[0], box[1], r.x0, r.x1, f.x0, f.x1) + lowest_term(box[2], box[3], r.y0, r.y1, f.y0, f.y1) < 0);
+  const Pair g0 = {box[0], box[2]}, g1 = {box[1], box[3]};
+  const Pair d0 = Pair{r.x0, r.y0} - Pair{f.x1, f.y1}, d1 = Pair{r.x1, r.y1} - Pair{f.x0, f.y0};
+  const Pair low = pair_min(pair_min(g0 * d0, g0 * d1), pair_min(g1 * d0, g1 * d1));
+  return !(low[0] + low[1] < 0);
 }
 
 // Upper bound of S(y) - psi dist(y, F) - T over the rectangle r (disjoint from F's
@@ -1647,7 +1648,8 @@ class BlockSearch {
     }
     return out & keep;
   }
-  // lowest_term() for the block's columns (rows) [t0 + c, t0 + c + 1], c = 0 .. kBlock - 1.
+  // rises_away()'s lowest term along one axis for the block's columns (rows)
+  // [t0 + c, t0 + c + 1], c = 0 .. kBlock - 1.
   static std::array<double, kBlock> lowest_terms(double g0, double g1, double r0, double r1, int t0) {
     std::array<double, kBlock> out;
     for (size_t c = 0; c < kBlock; c += 2) {
