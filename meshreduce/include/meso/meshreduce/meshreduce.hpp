@@ -142,8 +142,8 @@ struct ReduceReport {
 //    then puts back the corners of any steep face it left facing away from the input under
 //    it (the same sampled test), see below. No output face deviates more than
 //    max_normal_deviation from the input faces it replaced. (A regression test and sweeps of
-//    the brick wall find no face against the input under it; that is measured, not proven:
-//    docs/benchmarks.md.) No collapse creates a needle beyond max_aspect_ratio (and best's
+//    the brick wall find no face against the input under it; on walls with 2-4x its relief,
+//    reduced to faces far larger than the bricks, some remain: docs/benchmarks.md.) No collapse creates a needle beyond max_aspect_ratio (and best's
 //    surface fit turns no face by 90 degrees or more and makes none a needle beyond it
 //    either);
 //  - when the input has UVs: no UV triangle flips or becomes degenerate, the UVs of the
