@@ -457,12 +457,28 @@ class ConeSearch {
       if (!touches_) {
         const double ux = p.x(s0) + p.x(s1) - 2 * cx_, uy = p.y(t0) + p.y(t1) - 2 * cy_;
         const double n = length(ux, uy);
-        double b = 0;
-        for (int k = 0; k < 4 && b <= level(); ++k) {
-          const double l = (ux * (p.x(ss[k]) - cx_) + uy * (p.y(ts[k]) - cy_)) / n;  // u . (y - c), u the unit direction to the centre
-          b = l > 0 ? std::max(b, (v[k] - top_) / l) : kInf;
+        // Settled when at every corner u . (y - c) = dot / n > 0 and (v - T) / (dot / n) <=
+        // level. Those two divisions, in a chain, were the latency of this function; where
+        // (v - T) n and level dot differ by more than a relative 1e-9 (far above the rounding
+        // of either form) their comparison gives the same verdict without them.
+        const double lvl = level();
+        bool settled = true;
+        for (int k = 0; k < 4 && settled; ++k) {
+          const double dot = ux * (p.x(ss[k]) - cx_) + uy * (p.y(ts[k]) - cy_), rise = v[k] - top_;
+          if (!(dot > 1e-290)) {  // not positive, or small enough for the quotient to underflow
+            const double l = dot / n;
+            settled = l > 0 && (rise / l <= lvl);
+            continue;
+          }
+          const double lhs = rise * n, rhs = lvl * dot;
+          if (lhs <= rhs * (1 - 1e-9)) continue;
+          if (lhs > rhs * (1 + 1e-9)) {
+            settled = false;
+            continue;
+          }
+          settled = rise / (dot / n) <= lvl;
         }
-        if (b <= level()) return;
+        if (settled) return;
       }
       if (relaxed_ && never_descends(p, s0, t0, s1, t1)) return;
       if (boundary_max_ || relaxed_) {
