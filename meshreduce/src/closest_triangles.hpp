@@ -153,6 +153,14 @@ class ClosestTriangles {
   RTCScene scene_ = nullptr;
 };
 
+// The mean edge length of a set of triangles (1 for an empty set): faces_away's sample spacing.
+inline double mean_edge(const std::vector<Triangle>& tris) {
+  if (tris.empty()) return 1.0;
+  double edges = 0;
+  for (const Triangle& t : tris) edges += (t.b - t.a).norm() + (t.c - t.b).norm() + (t.a - t.c).norm();
+  return edges / (3.0 * static_cast<double>(tris.size()));
+}
+
 // Whether triangle (a, b, c), of normal n, faces away from the set's surface under it: the
 // cosine between n and the summed (area-weighted) normals of the set's triangles nearest to
 // the centroids of its k x k subdivision (k its longest edge over `mean_edge`, 2 to 16) is

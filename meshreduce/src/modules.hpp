@@ -109,6 +109,7 @@ struct InputSurface {
   std::once_flag built;
   std::vector<Triangle> triangles;
   std::unique_ptr<ClosestTriangles> nearest;
+  double mean_edge = 1;
 };
 
 // No face normal flips and no new degenerate face. Tests per face of the fan:
@@ -140,19 +141,14 @@ class NoFlip final : public CollapseModule {
     const Mesh& m = loop.mesh();
     input_.assign(m.n_faces(), Vec3d(0, 0, 0));
     corners_.assign(m.n_faces(), {0, 0, 0});
-    double edges = 0;
     for (auto f : m.faces()) {
       const auto hs = face_halfedges(m, f);
       const Vec3d& a = loop.pos(m.to_vertex_handle(hs[0]));
       input_[static_cast<size_t>(f.idx())] = OpenMesh::cross(loop.pos(m.to_vertex_handle(hs[1])) - a, loop.pos(m.to_vertex_handle(hs[2])) - a);
-      for (size_t k = 0; k < 3; ++k) {
-        corners_[static_cast<size_t>(f.idx())][k] = m.to_vertex_handle(hs[k]).idx();
-        edges += (loop.pos(m.to_vertex_handle(hs[k])) - loop.pos(m.to_vertex_handle(hs[(k + 1) % 3]))).norm();
-      }
+      for (size_t k = 0; k < 3; ++k) corners_[static_cast<size_t>(f.idx())][k] = m.to_vertex_handle(hs[k]).idx();
     }
     points_.resize(m.n_vertices());
     for (auto v : m.vertices()) points_[static_cast<size_t>(v.idx())] = loop.pos(v);
-    mean_edge_ = m.n_faces() > 0 ? edges / (3.0 * static_cast<double>(m.n_faces())) : 1.0;
   }
 
   bool allow(const Candidate& c) override {
@@ -197,8 +193,9 @@ class NoFlip final : public CollapseModule {
         surface_->triangles.push_back(
             Triangle{points_[static_cast<size_t>(t[0])], points_[static_cast<size_t>(t[1])], points_[static_cast<size_t>(t[2])]});
       surface_->nearest = std::make_unique<ClosestTriangles>(surface_->triangles);
+      surface_->mean_edge = mean_edge(surface_->triangles);
     });
-    return reduce::faces_away(*surface_->nearest, a, b, c, n, mean_edge_, 0.1);
+    return reduce::faces_away(*surface_->nearest, a, b, c, n, surface_->mean_edge, 0.1);
   }
 
   std::vector<Vec3d> input_;   // per face: the summed area-weighted normals of its input faces
@@ -206,7 +203,6 @@ class NoFlip final : public CollapseModule {
   // The input surface (normalised coordinates), for faces_away().
   std::vector<Vec3d> points_;
   std::vector<std::array<int, 3>> corners_;
-  double mean_edge_ = 1;
   InputSurface* surface_;
   std::unique_ptr<InputSurface> own_;
 };

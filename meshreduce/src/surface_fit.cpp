@@ -110,9 +110,7 @@ SurfaceFitTarget::SurfaceFitTarget(const Mesh& input) : impl_(std::make_unique<I
     s.normals.push_back(n.sqrnorm() > 0 ? Vec3d(n / n.norm()) : Vec3d(0, 0, 0));
   }
   s.tree = std::make_unique<ClosestTriangles>(s.triangles);
-  double edges = 0;
-  for (const Triangle& t : s.triangles) edges += (t.b - t.a).norm() + (t.c - t.b).norm() + (t.a - t.c).norm();
-  if (!s.triangles.empty()) s.mean_edge = edges / (3.0 * static_cast<double>(s.triangles.size()));
+  s.mean_edge = mean_edge(s.triangles);
 }
 
 SurfaceFitTarget::~SurfaceFitTarget() = default;
