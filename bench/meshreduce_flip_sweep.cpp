@@ -49,10 +49,11 @@ int main(int argc, char** argv) {
     for (const auto& [name, quality] : {std::pair{"fast", ReduceQuality::fast}, std::pair{"balanced", ReduceQuality::balanced},
                                         std::pair{"best", ReduceQuality::best}}) {
       o.quality = quality;
-      const Mesh low = reduce_mesh(high, o);
+      ReduceReport rep;
+      const Mesh low = reduce_mesh(high, o, &rep);
       const bench::FlipCount c = bench::count_flipped(input, triangle_soup(low));
-      std::printf("%d x %d wall, target %zu, %s: %zu faces, %zu flipped, %zu degenerate\n", wall.columns, wall.rows, o.target_faces, name,
-                  static_cast<size_t>(low.n_faces()), c.flipped, c.degenerate);
+      std::printf("%d x %d wall, target %zu, %s: %zu faces, %zu flipped, %zu degenerate (%d passes, %.2f s)\n", wall.columns, wall.rows,
+                  o.target_faces, name, static_cast<size_t>(low.n_faces()), c.flipped, c.degenerate, rep.passes, rep.seconds);
       any = any || c.flipped > 0 || c.degenerate > 0;
     }
   }

@@ -762,6 +762,8 @@ TEST(CliMeshreduce, LocksAndTheTargetOutOfReach) {
   ASSERT_EQ(hand.code, 0) << hand.err;
   const auto report = nlohmann::json::parse(hand.out);
   EXPECT_EQ(report["locked_vertices"], 16);
+  EXPECT_EQ(report["passes"], 1) << "a flat grid leaves no face facing away: one pass";
+  EXPECT_EQ(report["flipped_faces"], 0);
   EXPECT_FALSE(report["target_reached"].get<bool>());
   EXPECT_GE(report["output"]["faces"].get<size_t>(), 18u) << "the hand's 18 faces stay";
   EXPECT_EQ(lines(hand.err), 2u) << hand.err;  // the warning, then "wrote"

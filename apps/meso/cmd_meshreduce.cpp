@@ -242,6 +242,9 @@ void add_meshreduce(CLI::App& app, Context& ctx) {
                               (locked ? ": the locks (" + std::to_string(r.locked_vertices) +
                                             " vertices) and the constraints allow no further collapse"
                                       : ": no further collapse keeps the UV charts, boundaries and orientation intact"));
+      if (r.flipped_faces > 0)
+        warn(ctx.globals, std::to_string(r.flipped_faces) + " output faces face away from the input under them after " +
+                              std::to_string(r.passes) + " passes of the reduction");
       OutputSet outputs;
       write_mesh(out, outputs.add(args->output));
       if (record) write_progressive(pm, outputs.add(args->progressive));
@@ -253,6 +256,8 @@ void add_meshreduce(CLI::App& app, Context& ctx) {
                 {"target_faces", o.target_faces},
                 {"target_reached", r.target_reached},
                 {"collapses", r.collapses},
+                {"passes", r.passes},
+                {"flipped_faces", r.flipped_faces},
                 {"seconds", r.seconds},
                 {"quality", args->quality},
                 {"bounding_box_diagonal", diagonal},

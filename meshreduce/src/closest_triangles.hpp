@@ -163,14 +163,15 @@ inline double mean_edge(const std::vector<Triangle>& tris) {
 
 // Whether triangle (a, b, c), of normal n, faces away from the set's surface under it: the
 // cosine between n and the summed (area-weighted) normals of the set's triangles nearest to
-// the centroids of its k x k subdivision (k its longest edge over `mean_edge`, 2 to 16) is
-// below `min_cos`. With min_cos 0 this is a flip as bench/meshreduce_peers counts it (there
-// k goes up to 64); a face nearly perpendicular to the input is on the edge of that count,
-// where the nearest of two equidistant triangles decides, hence the callers' margin.
+// the centroids of its k x k subdivision (k its longest edge over `mean_edge`, clamped to
+// [min_k, max_k]) is below `min_cos`. With min_cos 0 and k in [4, 64] this is a flip as
+// bench/meshreduce_peers counts it; a face nearly perpendicular to the input is on the edge
+// of that count, where the nearest of two equidistant triangles decides, hence the callers'
+// margins.
 inline bool faces_away(const ClosestTriangles& set, const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& n, double mean_edge,
-                       double min_cos) {
+                       double min_cos, int min_k = 2, int max_k = 16) {
   const double longest = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
-  const int k = static_cast<int>(std::clamp(std::ceil(longest / mean_edge), 2.0, 16.0));
+  const int k = static_cast<int>(std::clamp(std::ceil(longest / mean_edge), static_cast<double>(min_k), static_cast<double>(max_k)));
   Vec3d m(0, 0, 0);
   int64_t hint = -1;
   for (int up = 1; up <= 2; ++up)  // upright sub-triangles, then the inverted ones

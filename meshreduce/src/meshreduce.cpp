@@ -97,11 +97,15 @@ std::vector<uint8_t> fit_fixed_vertices(const Mesh& mesh, const ReduceOptions& o
   return fixed;
 }
 
-// One reduction with the given face-plane weighting (LoopOptions::uniform_planes).
-Mesh reduce_once(const Mesh& input, const ReduceOptions& options, bool uniform_planes, ReduceReport* report,
-                 Progress& progress, ProgressiveMesh* progressive, reduce::InputSurface* surface = nullptr) {
+// One reduction with the given face-plane weighting (LoopOptions::uniform_planes): every
+// new face within the `strict` balls is tested against the input (NoFlip), and `flipped`
+// receives the output faces that the bench would count as flipped.
+Mesh reduce_once(const Mesh& input, const ReduceOptions& options, bool uniform_planes, ReduceReport* report, Progress& progress,
+                 ProgressiveMesh* progressive, reduce::InputSurface* surface, const std::vector<reduce::FlipBall>& strict,
+                 std::vector<reduce::FlipBall>& flipped) {
   using namespace reduce;
   const auto t0 = std::chrono::steady_clock::now();
+  flipped.clear();
   Mesh mesh;
   if (progressive) {
     // The collapses refer to halfedges: reduce the mesh the replay will rebuild. Compaction
@@ -152,7 +156,9 @@ Mesh reduce_once(const Mesh& input, const ReduceOptions& options, bool uniform_p
     loop.add(std::make_unique<ChartGuard>(loop, options.boundary_tolerance * diagonal, options.seam_tolerance * diagonal,
                                           options.uv_tolerance));
     if (lo.has_uvs) loop.add(std::make_unique<UvFoldGuard>());
-    loop.add(std::make_unique<NoFlip>(surface));
+    auto no_flip = std::make_unique<NoFlip>(surface, strict);
+    NoFlip& flips = *no_flip;
+    loop.add(std::move(no_flip));
     if (options.max_normal_deviation < 180.0f) loop.add(std::make_unique<NormalDeviation>(options.max_normal_deviation));
     if (options.max_aspect_ratio > 0.0f) loop.add(std::make_unique<AspectRatioGuard>(loop, options.max_aspect_ratio));
     ErrorBound* bound = nullptr;
@@ -165,6 +171,7 @@ Mesh reduce_once(const Mesh& input, const ReduceOptions& options, bool uniform_p
     if (bound) rep.tracked_error = bound->tracked(loop) / loop.scale();
     rep.max_quadric_cost = loop.max_cost();
     for (const auto& m : loop.modules()) rep.rejected[m->name()] = m->rejected;
+    flipped = flips.flipped_faces(loop);
     loop.write_back();
     compact(mesh);
   }
@@ -183,11 +190,38 @@ Mesh reduce_once(const Mesh& input, const ReduceOptions& options, bool uniform_p
   return mesh;
 }
 
+// Passes of a reduction at most: the first, then one more per pass that left flipped faces.
+constexpr int kMaxPasses = 4;
+
+// reduce_once, again while it leaves flipped faces, each pass testing every new face around
+// the flipped faces of all passes before it (NoFlip's strict balls). The report's time
+// covers all passes.
+Mesh reduce_without_flips(const Mesh& input, const ReduceOptions& options, bool uniform_planes, ReduceReport* report, Progress& progress,
+                          ProgressiveMesh* progressive, reduce::InputSurface& surface) {
+  const auto t0 = std::chrono::steady_clock::now();
+  std::vector<reduce::FlipBall> strict, flipped;
+  ReduceReport rep;
+  Mesh out;
+  for (int pass = 1;; ++pass) {
+    out = reduce_once(input, options, uniform_planes, &rep, pass == 1 ? progress : null_progress(), progressive, &surface, strict, flipped);
+    rep.passes = pass;
+    rep.flipped_faces = flipped.size();
+    if (flipped.empty() || pass == kMaxPasses) break;
+    strict.insert(strict.end(), flipped.begin(), flipped.end());
+  }
+  rep.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (report) *report = rep;
+  return out;
+}
+
 }  // namespace
 
 Mesh reduce_mesh(const Mesh& input, const ReduceOptions& options, ReduceReport* report, Progress& progress,
                  ProgressiveMesh* progressive) {
-  if (options.quality != ReduceQuality::best) return reduce_once(input, options, false, report, progress, progressive);
+  if (options.quality != ReduceQuality::best) {
+    reduce::InputSurface surface;
+    return reduce_without_flips(input, options, false, report, progress, progressive, surface);
+  }
   // best: both weightings, then the output nearer the input by the measure meso reports.
   const auto t0 = std::chrono::steady_clock::now();
   ReduceReport reports[2];
@@ -202,8 +236,8 @@ Mesh reduce_mesh(const Mesh& input, const ReduceOptions& options, ReduceReport* 
   std::unique_ptr<reduce::SurfaceFitTarget> target;
   reduce::InputSurface surface;  // the flip guard's, shared by the two reductions
   tbb::parallel_invoke(
-      [&] { outputs[0] = reduce_once(input, options, false, &reports[0], progress, progressive ? &records[0] : nullptr, &surface); },
-      [&] { outputs[1] = reduce_once(input, options, true, &reports[1], null_progress(), progressive ? &records[1] : nullptr, &surface); },
+      [&] { outputs[0] = reduce_without_flips(input, options, false, &reports[0], progress, progressive ? &records[0] : nullptr, surface); },
+      [&] { outputs[1] = reduce_without_flips(input, options, true, &reports[1], null_progress(), progressive ? &records[1] : nullptr, surface); },
       [&] { reference = std::make_unique<SurfaceDistanceReference>(input); },
       [&] {
         if (fit) target = std::make_unique<reduce::SurfaceFitTarget>(input);

@@ -17,6 +17,8 @@
 #include <utility>
 #include <vector>
 
+#include <tbb/parallel_for.h>
+
 namespace meso::reduce {
 
 inline Vec3d new_normal(const FanFace& f, const Vec3d& q) { return OpenMesh::cross(f.b - q, f.c - q); }
@@ -112,6 +114,13 @@ struct InputSurface {
   double mean_edge = 1;
 };
 
+// A ball (normalised coordinates) around a face that a reduction left facing away from the
+// input under it: the face's centroid, out to its farthest corner.
+struct FlipBall {
+  Vec3d centre;
+  double radius = 0;
+};
+
 // No face normal flips and no new degenerate face. Tests per face of the fan:
 //  - against its normal before this collapse (dot > 0), the classic test;
 //  - against the input surface the face stands for: the sum of the area-weighted normals
@@ -124,11 +133,16 @@ struct InputSurface {
 //  - a face more than 60 degrees from that sum, against the input triangles nearest to
 //    samples over it (faces_away in closest_triangles.hpp, with a margin: refused past 84
 //    degrees). Over steep relief the sum can hold enough of the flanks (of bricks) to pass a
-//    face that faces away from the input under it (docs/benchmarks.md, "steep faces").
+//    face that faces away from the input under it (docs/benchmarks.md, "steep faces");
+//  - within the `strict` balls, where an earlier pass of the same reduction left a flipped
+//    face (reduce_mesh), every face, steep or not, against the input under it sampled as
+//    the bench samples it (k up to 64), refused past 84 degrees. On walls with 2-4x the
+//    relief the 60-degree trigger misses faces that the bench counts as flipped; testing
+//    every face everywhere made `fast` 9x slower (docs/benchmarks.md).
 class NoFlip final : public CollapseModule {
  public:
   // `shared`: an InputSurface to use (and build, if no one has yet); null: one of its own.
-  explicit NoFlip(InputSurface* shared = nullptr) : surface_(shared) {
+  explicit NoFlip(InputSurface* shared = nullptr, std::vector<FlipBall> strict = {}) : surface_(shared), strict_(std::move(strict)) {
     if (!surface_) {
       own_ = std::make_unique<InputSurface>();
       surface_ = own_.get();
@@ -168,7 +182,8 @@ class NoFlip final : public CollapseModule {
       if (OpenMesh::dot(n1, input) < 0) return false;
       // Steep against that sum: against the input under it, refused from 84 degrees on (cos
       // 0.1), a margin over the flip itself that the fit of `best` (surface_fit.cpp) relies on.
-      if (OpenMesh::dot(n1, input) < 0.5 * n1.norm() * input.norm() && faces_away(c.q, f.b, f.c, n1)) return false;
+      if (OpenMesh::dot(n1, input) < 0.5 * n1.norm() * input.norm() && faces_away(c.q, f.b, f.c, n1, 2, kSampling)) return false;
+      if (!strict_.empty() && in_strict(c.q, f.b, f.c) && faces_away(c.q, f.b, f.c, n1, 4, kFullSampling)) return false;
       const Vec3d n0 = old_normal(f);
       if (!(n0.sqrnorm() > 0)) continue;  // already degenerate: cannot get worse
       // Degenerate: sin of the corner angle at q below 1e-9.
@@ -183,10 +198,60 @@ class NoFlip final : public CollapseModule {
     for (size_t i = 0; i < c.fan->size(); ++i) input_[static_cast<size_t>((*c.fan)[i].f.idx())] = merged_[i];
   }
 
+  // The faces of the loop's mesh (live, non-degenerate) flipped as bench/meshreduce_peers
+  // counts a flip, or within 3 degrees of it: their normal against the input triangles
+  // nearest to samples over them (faces_away, k in [4, 64] as the bench's, below cos 0.05),
+  // for the faces a coarser sampling finds steep (below cos 0.5, k in [2, 8]: on the 262k-face
+  // bricks at 1 % the full sampling of every face cost a third of `fast`'s time). In face
+  // order; the faces are tested in parallel.
+  std::vector<FlipBall> flipped_faces(const CollapseLoop& loop) {
+    ensure_surface();
+    const Mesh& m = loop.mesh();
+    std::vector<std::array<Vec3d, 3>> tris;
+    tris.reserve(m.n_faces());
+    for (auto f : m.faces()) {
+      const auto hs = face_halfedges(m, f);
+      tris.push_back({loop.pos(m.to_vertex_handle(hs[0])), loop.pos(m.to_vertex_handle(hs[1])), loop.pos(m.to_vertex_handle(hs[2]))});
+    }
+    std::vector<uint8_t> flipped(tris.size(), 0);
+    tbb::parallel_for(size_t{0}, tris.size(), [&](size_t i) {
+      const auto& [a, b, c] = tris[i];
+      const Vec3d n = OpenMesh::cross(b - a, c - a);
+      flipped[i] = n.sqrnorm() > 0 && reduce::faces_away(*surface_->nearest, a, b, c, n, surface_->mean_edge, kScreenCos, 2, kScreenSampling) &&
+                   reduce::faces_away(*surface_->nearest, a, b, c, n, surface_->mean_edge, 0.05, 4, kFullSampling);
+    });
+    std::vector<FlipBall> out;
+    for (size_t i = 0; i < tris.size(); ++i)
+      if (flipped[i]) out.push_back(ball(tris[i][0], tris[i][1], tris[i][2]));
+    return out;
+  }
+
  private:
-  // faces_away() against the input, whose triangles and BVH are built for the first face
-  // that needs them.
-  bool faces_away(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& n) {
+  static constexpr int kSampling = 16, kFullSampling = 64;  // faces_away's largest k
+  // flipped_faces() samples a face fully only where a coarse look (k up to 8) finds it
+  // within 60 degrees of perpendicular to the input under it.
+  static constexpr int kScreenSampling = 8;
+  static constexpr double kScreenCos = 0.5;
+
+  static FlipBall ball(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+    const Vec3d g = (a + b + c) / 3.0;
+    return {g, std::max({(a - g).norm(), (b - g).norm(), (c - g).norm()})};
+  }
+  // Whether triangle (a, b, c)'s ball meets a strict one.
+  bool in_strict(const Vec3d& a, const Vec3d& b, const Vec3d& c) const {
+    const FlipBall t = ball(a, b, c);
+    for (const FlipBall& s : strict_)
+      if ((t.centre - s.centre).norm() < t.radius + s.radius) return true;
+    return false;
+  }
+
+  // faces_away() against the input (refused past 84 degrees: cos 0.1), whose triangles and
+  // BVH are built for the first face that needs them.
+  bool faces_away(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& n, int min_k, int max_k) {
+    ensure_surface();
+    return reduce::faces_away(*surface_->nearest, a, b, c, n, surface_->mean_edge, 0.1, min_k, max_k);
+  }
+  void ensure_surface() {
     std::call_once(surface_->built, [&] {
       surface_->triangles.reserve(corners_.size());
       for (const auto& t : corners_)
@@ -195,7 +260,6 @@ class NoFlip final : public CollapseModule {
       surface_->nearest = std::make_unique<ClosestTriangles>(surface_->triangles);
       surface_->mean_edge = mean_edge(surface_->triangles);
     });
-    return reduce::faces_away(*surface_->nearest, a, b, c, n, surface_->mean_edge, 0.1);
   }
 
   std::vector<Vec3d> input_;   // per face: the summed area-weighted normals of its input faces
@@ -205,6 +269,7 @@ class NoFlip final : public CollapseModule {
   std::vector<std::array<int, 3>> corners_;
   InputSurface* surface_;
   std::unique_ptr<InputSurface> own_;
+  std::vector<FlipBall> strict_;
 };
 
 // Normal cones per face (OpenMesh's ModNormalDeviation): every face keeps the cone of the

@@ -117,6 +117,11 @@ struct ReduceReport {
   // tracked on, in object units (-1 when not tracked).
   double tracked_error = -1;  // (also -1 when best keeps a fitted mesh: the tracking was the reduction's)
   size_t locked_vertices = 0;  // vertices pinned by lock_boundary and lock_groups
+  // Reductions run (see the guarantees below): 1, or more where one left flipped faces.
+  int passes = 1;
+  // Output faces of the (last) reduction that the bench's measure counts as flipped: 0
+  // unless every pass left some (before best's fit, which has its own repair).
+  size_t flipped_faces = 0;
   // With ReduceQuality::best: the face-plane weighting chosen ("area" or "uniform") and the
   // measured Hausdorff distance of each candidate (area, uniform), object units.
   std::string planes = "area";
@@ -140,10 +145,15 @@ struct ReduceReport {
 //    from the input triangles nearest to samples over it (the bench's flip count, with a
 //    margin); best's fit checks its moves against the input nearest each face's centroid,
 //    then puts back the corners of any steep face it left facing away from the input under
-//    it (the same sampled test), see below. No output face deviates more than
+//    it (the same sampled test), see below. Each output face is then tested against the
+//    input under it as the bench counts a flip (with a margin of 3 degrees); where any
+//    faces away, the reduction runs again (up to 4 passes, ReduceReport::passes), testing
+//    every new face around those of the passes before, and ReduceReport::flipped_faces
+//    counts the faces the last pass leaves. No output face deviates more than
 //    max_normal_deviation from the input faces it replaced. (A regression test and sweeps of
-//    the brick wall find no face against the input under it; on walls with 2-4x its relief,
-//    reduced to faces far larger than the bricks, some remain: docs/benchmarks.md.) No collapse creates a needle beyond max_aspect_ratio (and best's
+//    the brick wall, with up to 4x its relief, find no face against the input under it but
+//    2 in 15 reductions of the 4x wall, where the bench's nearest-triangle ties decide:
+//    docs/benchmarks.md.) No collapse creates a needle beyond max_aspect_ratio (and best's
 //    surface fit turns no face by 90 degrees or more and makes none a needle beyond it
 //    either);
 //  - when the input has UVs: no UV triangle flips or becomes degenerate, the UVs of the
@@ -166,7 +176,9 @@ struct ReduceReport {
 //
 // With `progressive`, also records the input and every collapse made (progressive.hpp):
 // progressive_level(*progressive, k) then equals reduce_mesh with target_faces = k, for
-// every k from the output's face count to the input's. The reduction then runs on the input
+// every k from the output's face count to the input's, when both took one pass (the record
+// is the last pass's: a reduction that ran again tested the faces around its flips in all
+// its collapses, those above k included). The reduction then runs on the input
 // rebuilt face by face (progressive_base_input). That is the input itself, and the output
 // the same as without `progressive` (except for best, which fits only without a record),
 // for meshes built by add_face in face order (the test
