@@ -202,7 +202,7 @@ class NoFlip final : public CollapseModule {
   // counts a flip, or within 3 degrees of it: their normal against the input triangles
   // nearest to samples over them (faces_away, k in [4, 64] as the bench's, below cos 0.05),
   // for the faces a coarser sampling finds steep (below cos 0.5, k in [2, 8]: on the 262k-face
-  // bricks at 1 % the full sampling of every face cost a third of `fast`'s time). In face
+  // bricks at 1 % the full sampling of every face cost a fifth to a third of `fast`). In face
   // order; the faces are tested in parallel.
   std::vector<FlipBall> flipped_faces(const CollapseLoop& loop) {
     ensure_surface();
