@@ -97,8 +97,11 @@ class ClosestTriangles {
   // and -1 for an empty set). `hint`, a triangle likely to be near (e.g. the previous
   // sample's nearest; -1: none), starts the search with its distance as the radius, which
   // prunes from the first node on; the answer is the same with any hint. Thread-safe.
-  std::pair<double, int64_t> nearest(const Vec3d& p, int64_t hint = -1) const {
-    Query q{this, p, std::numeric_limits<double>::infinity(), -1, 0};
+  // With `against`: of the triangles as near as the nearest (within 1e-9 of its squared
+  // distance: triangles sharing the nearest vertex or edge), the one whose normal (cross
+  // product) has the least dot product with *against (ties: the lowest index).
+  std::pair<double, int64_t> nearest(const Vec3d& p, int64_t hint = -1, const Vec3d* against = nullptr) const {
+    Query q{this, p, std::numeric_limits<double>::infinity(), -1, 0, against, 0};
     if (tris_.empty()) return {q.best2, q.best};
     const Vec3d r = p - centre_;
     q.slack = 1e-6 * std::max(extent_, r.max_abs());
@@ -106,6 +109,7 @@ class ClosestTriangles {
     if (hint >= 0 && static_cast<size_t>(hint) < tris_.size()) {
       q.best2 = distance_sqr(p, tris_[static_cast<size_t>(hint)]);
       q.best = hint;
+      if (against) q.best_dot = q.dot(hint);
       radius = q.radius(q.best2);
     }
     RTCPointQuery query;
@@ -127,17 +131,35 @@ class ClosestTriangles {
     double best2;
     int64_t best;
     double slack;
+    const Vec3d* against;
+    double best_dot;  // with `against`: the best triangle's normal against it
     // The search radius for a squared distance d2: its root, plus 1e-6 of it and the slack.
     float radius(double d2) const { return static_cast<float>(std::sqrt(d2) * (1 + 1e-6) + slack); }
+    double dot(int64_t id) const {
+      const Triangle& t = self->tris_[static_cast<size_t>(id)];
+      return OpenMesh::dot(*against, OpenMesh::cross(t.b - t.a, t.c - t.a));
+    }
   };
 
   static bool visit(RTCPointQueryFunctionArguments* args) {
     Query& q = *static_cast<Query*>(args->userPtr);
     const int64_t id = args->primID;
     const double d2 = distance_sqr(q.p, q.self->tris_[static_cast<size_t>(id)]);
-    if (d2 > q.best2 || (d2 == q.best2 && id > q.best)) return false;
-    q.best2 = d2;
-    q.best = id;
+    if (q.against) {
+      // Within 1e-9 of the best (the radius keeps such triangles in reach: its margin is
+      // 1e-6), the least dot product wins; nearer than that, the triangle does.
+      const double tie = 1e-9 * q.best2;
+      if (d2 > q.best2 + tie) return false;
+      const double dot = q.dot(id);
+      if (d2 >= q.best2 - tie && (dot > q.best_dot || (dot == q.best_dot && id > q.best))) return false;
+      q.best_dot = dot;
+      q.best2 = std::min(q.best2, d2);
+      q.best = id;
+    } else {
+      if (d2 > q.best2 || (d2 == q.best2 && id > q.best)) return false;
+      q.best2 = d2;
+      q.best = id;
+    }
     const float radius = q.radius(d2);
     if (!(radius < args->query->radius)) return false;
     args->query->radius = radius;
@@ -161,29 +183,39 @@ inline double mean_edge(const std::vector<Triangle>& tris) {
   return edges / (3.0 * static_cast<double>(tris.size()));
 }
 
+// faces_away()'s test: the cosine below which a face faces away, its sampling (k x k with k
+// the face's longest edge over the mean edge, clamped to [min_k, max_k]), and whether a
+// sample tied between triangles (nearest to a vertex or an edge they share) counts the one
+// facing most against the face instead of the lowest index.
+struct AwayTest {
+  double min_cos;
+  int min_k = 2, max_k = 16;
+  bool worst_ties = false;
+};
+
 // Whether triangle (a, b, c), of normal n, faces away from the set's surface under it: the
 // cosine between n and the summed (area-weighted) normals of the set's triangles nearest to
-// the centroids of its k x k subdivision (k its longest edge over `mean_edge`, clamped to
-// [min_k, max_k]) is below `min_cos`. With min_cos 0 and k in [4, 64] this is a flip as
-// bench/meshreduce_peers counts it; a face nearly perpendicular to the input is on the edge
-// of that count, where the nearest of two equidistant triangles decides, hence the callers'
-// margins.
+// the centroids of its k x k subdivision is below t.min_cos. With min_cos 0 and k in [4, 64]
+// this is a flip as bench/meshreduce_peers counts it, up to its ties: at a brick's convex
+// corner every triangle sharing the nearest vertex is nearest, and the bench counts any one
+// of them (CGAL's pick); worst_ties makes the test hold whichever it picks. A face nearly
+// perpendicular to the input is on the edge of that count, hence the callers' margins.
 inline bool faces_away(const ClosestTriangles& set, const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& n, double mean_edge,
-                       double min_cos, int min_k = 2, int max_k = 16) {
+                       const AwayTest& test) {
   const double longest = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
-  const int k = static_cast<int>(std::clamp(std::ceil(longest / mean_edge), static_cast<double>(min_k), static_cast<double>(max_k)));
+  const int k = static_cast<int>(std::clamp(std::ceil(longest / mean_edge), static_cast<double>(test.min_k), static_cast<double>(test.max_k)));
   Vec3d m(0, 0, 0);
   int64_t hint = -1;
   for (int up = 1; up <= 2; ++up)  // upright sub-triangles, then the inverted ones
     for (int i = 0; i + up <= k; ++i)
       for (int j = 0; i + j + up <= k; ++j) {
         const double u = (i + up / 3.0) / k, v = (j + up / 3.0) / k;
-        hint = set.nearest(a + u * (b - a) + v * (c - a), hint).second;
+        hint = set.nearest(a + u * (b - a) + v * (c - a), hint, test.worst_ties ? &n : nullptr).second;
         if (hint < 0) return false;
         const Triangle& t = set.triangle(hint);
         m += OpenMesh::cross(t.b - t.a, t.c - t.a);
       }
-  return OpenMesh::dot(n, m) < min_cos * n.norm() * m.norm();
+  return OpenMesh::dot(n, m) < test.min_cos * n.norm() * m.norm();
 }
 
 }  // namespace meso::reduce

@@ -191,7 +191,7 @@ Mesh reduce_once(const Mesh& input, const ReduceOptions& options, bool uniform_p
 }
 
 // Passes of a reduction at most: the first, then one more per pass that left flipped faces.
-constexpr int kMaxPasses = 4;
+constexpr int kMaxPasses = 6;
 
 // reduce_once, again while it leaves flipped faces, each pass testing every new face around
 // the flipped faces of all passes before it (NoFlip's strict balls). The report's time

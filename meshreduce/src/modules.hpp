@@ -136,7 +136,7 @@ struct FlipBall {
 //    face that faces away from the input under it (docs/benchmarks.md, "steep faces");
 //  - within the `strict` balls, where an earlier pass of the same reduction left a flipped
 //    face (reduce_mesh), every face, steep or not, against the input under it sampled as
-//    the bench samples it (k up to 64), refused past 84 degrees. On walls with 2-4x the
+//    the bench samples it (k up to 64, ties counted against it), refused past 84 degrees. On walls with 2-4x the
 //    relief the 60-degree trigger misses faces that the bench counts as flipped; testing
 //    every face everywhere made `fast` 9x slower (docs/benchmarks.md).
 class NoFlip final : public CollapseModule {
@@ -182,8 +182,8 @@ class NoFlip final : public CollapseModule {
       if (OpenMesh::dot(n1, input) < 0) return false;
       // Steep against that sum: against the input under it, refused from 84 degrees on (cos
       // 0.1), a margin over the flip itself that the fit of `best` (surface_fit.cpp) relies on.
-      if (OpenMesh::dot(n1, input) < 0.5 * n1.norm() * input.norm() && faces_away(c.q, f.b, f.c, n1, 2, kSampling)) return false;
-      if (!strict_.empty() && in_strict(c.q, f.b, f.c) && faces_away(c.q, f.b, f.c, n1, 4, kFullSampling)) return false;
+      if (OpenMesh::dot(n1, input) < 0.5 * n1.norm() * input.norm() && faces_away(c.q, f.b, f.c, n1, kSteepTest)) return false;
+      if (!strict_.empty() && in_strict(c.q, f.b, f.c) && faces_away(c.q, f.b, f.c, n1, kFullTest)) return false;
       const Vec3d n0 = old_normal(f);
       if (!(n0.sqrnorm() > 0)) continue;  // already degenerate: cannot get worse
       // Degenerate: sin of the corner angle at q below 1e-9.
@@ -200,10 +200,12 @@ class NoFlip final : public CollapseModule {
 
   // The faces of the loop's mesh (live, non-degenerate) flipped as bench/meshreduce_peers
   // counts a flip, or within 3 degrees of it: their normal against the input triangles
-  // nearest to samples over them (faces_away, k in [4, 64] as the bench's, below cos 0.05),
-  // for the faces a coarser sampling finds steep (below cos 0.5, k in [2, 8]: on the 262k-face
-  // bricks at 1 % the full sampling of every face cost a fifth to a third of `fast`). In face
-  // order; the faces are tested in parallel.
+  // nearest to samples over them (faces_away, k in [4, 64] as the bench's, below cos 0.05,
+  // ties counted against the face), for the faces a coarser sampling finds over 37 degrees
+  // from that input (below cos 0.8, k in [2, 8]: on the 262k-face bricks at 1 % the full
+  // sampling of every face cost a fifth to a third of `fast`; below cos 0.5, the screen let
+  // a flip through on the 96 x 48 wall at 3x relief). In face order; the faces are tested in
+  // parallel.
   std::vector<FlipBall> flipped_faces(const CollapseLoop& loop) {
     ensure_surface();
     const Mesh& m = loop.mesh();
@@ -217,8 +219,8 @@ class NoFlip final : public CollapseModule {
     tbb::parallel_for(size_t{0}, tris.size(), [&](size_t i) {
       const auto& [a, b, c] = tris[i];
       const Vec3d n = OpenMesh::cross(b - a, c - a);
-      flipped[i] = n.sqrnorm() > 0 && reduce::faces_away(*surface_->nearest, a, b, c, n, surface_->mean_edge, kScreenCos, 2, kScreenSampling) &&
-                   reduce::faces_away(*surface_->nearest, a, b, c, n, surface_->mean_edge, 0.05, 4, kFullSampling);
+      flipped[i] = n.sqrnorm() > 0 && reduce::faces_away(*surface_->nearest, a, b, c, n, surface_->mean_edge, kScreen) &&
+                   reduce::faces_away(*surface_->nearest, a, b, c, n, surface_->mean_edge, kFlipped);
     });
     std::vector<FlipBall> out;
     for (size_t i = 0; i < tris.size(); ++i)
@@ -227,11 +229,11 @@ class NoFlip final : public CollapseModule {
   }
 
  private:
-  static constexpr int kSampling = 16, kFullSampling = 64;  // faces_away's largest k
-  // flipped_faces() samples a face fully only where a coarse look (k up to 8) finds it
-  // within 60 degrees of perpendicular to the input under it.
-  static constexpr int kScreenSampling = 8;
-  static constexpr double kScreenCos = 0.5;
+  // faces_away's tests: steep faces in allow(), refused past 84 degrees; every face in the
+  // strict balls, sampled as the bench samples; flipped_faces() samples a face so only where
+  // a coarse look (kScreen) finds it steep. All but the first count the worst of tied
+  // triangles (a flip whichever the bench picks).
+  static constexpr AwayTest kSteepTest{0.1, 2, 16, false}, kFullTest{0.1, 4, 64, true}, kScreen{0.8, 2, 8, true}, kFlipped{0.05, 4, 64, true};
 
   static FlipBall ball(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
     const Vec3d g = (a + b + c) / 3.0;
@@ -247,9 +249,9 @@ class NoFlip final : public CollapseModule {
 
   // faces_away() against the input (refused past 84 degrees: cos 0.1), whose triangles and
   // BVH are built for the first face that needs them.
-  bool faces_away(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& n, int min_k, int max_k) {
+  bool faces_away(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& n, const AwayTest& test) {
     ensure_surface();
-    return reduce::faces_away(*surface_->nearest, a, b, c, n, surface_->mean_edge, 0.1, min_k, max_k);
+    return reduce::faces_away(*surface_->nearest, a, b, c, n, surface_->mean_edge, test);
   }
   void ensure_surface() {
     std::call_once(surface_->built, [&] {

@@ -143,17 +143,17 @@ struct ReduceReport {
 //    against the input faces it replaced (its normal against the sum of their area-weighted
 //    normals), nor, where it stands over 60 degrees from that sum, more than 84 degrees
 //    from the input triangles nearest to samples over it (the bench's flip count, with a
-//    margin); best's fit checks its moves against the input nearest each face's centroid,
-//    then puts back the corners of any steep face it left facing away from the input under
-//    it (the same sampled test), see below. Each output face is then tested against the
-//    input under it as the bench counts a flip (with a margin of 3 degrees); where any
-//    faces away, the reduction runs again (up to 4 passes, ReduceReport::passes), testing
-//    every new face around those of the passes before, and ReduceReport::flipped_faces
-//    counts the faces the last pass leaves. No output face deviates more than
-//    max_normal_deviation from the input faces it replaced. (A regression test and sweeps of
-//    the brick wall, with up to 4x its relief, find no face against the input under it but
-//    2 in 15 reductions of the 4x wall, where the bench's nearest-triangle ties decide:
-//    docs/benchmarks.md.) No collapse creates a needle beyond max_aspect_ratio (and best's
+//    margin). Each output face is then tested against the input under it as the bench
+//    counts a flip (with a margin of 3 degrees, and where the nearest input is a vertex or
+//    edge that triangles share, whichever of them faces most against it); where any faces
+//    away, the reduction runs again (up to 6 passes, ReduceReport::passes), testing every
+//    new face around those of the passes before, and ReduceReport::flipped_faces counts the
+//    faces the last pass leaves. best's fit checks its moves against the input nearest each
+//    face's centroid, then puts back the corners of any face it moved that faces away from
+//    the input under it (the same sampled test), see below. No output face deviates more
+//    than max_normal_deviation from the input faces it replaced. (A regression test and
+//    sweeps of the brick wall, with up to 4x its relief, find no face against the input
+//    under it: docs/benchmarks.md.) No collapse creates a needle beyond max_aspect_ratio (and best's
 //    surface fit turns no face by 90 degrees or more and makes none a needle beyond it
 //    either);
 //  - when the input has UVs: no UV triangle flips or becomes degenerate, the UVs of the
