@@ -136,9 +136,9 @@ struct FlipBall {
 //    face that faces away from the input under it (docs/benchmarks.md, "steep faces");
 //  - within the `strict` balls, where an earlier pass of the same reduction left a flipped
 //    face (reduce_mesh), every face, steep or not, against the input under it sampled as
-//    the bench samples it (k up to 64, ties counted against it), refused past 84 degrees. On walls with 2-4x the
-//    relief the 60-degree trigger misses faces that the bench counts as flipped; testing
-//    every face everywhere made `fast` 9x slower (docs/benchmarks.md).
+//    the bench samples it (k up to 64, ties counted against it), refused past 84 degrees.
+//    On walls with 2-4x the relief the 60-degree trigger misses faces that the bench counts
+//    as flipped; testing every face everywhere made `fast` 9x slower (docs/benchmarks.md).
 class NoFlip final : public CollapseModule {
  public:
   // `shared`: an InputSurface to use (and build, if no one has yet); null: one of its own.

@@ -406,14 +406,14 @@ SurfaceFitReport fit_to_surface(Mesh& mesh, const SurfaceFitTarget& target, cons
   // them. So does any face that this makes unacceptable (every state the iterations kept is
   // acceptable against the original positions: each check bounds a face by its state before
   // and the original), until none is left (each round puts back at least one vertex).
-  auto steep_away = [&](const std::vector<Vec3d>& at, size_t f, double min_cos) {
+  auto away_from_input = [&](const std::vector<Vec3d>& at, size_t f, double min_cos) {
     const FaceCorners& fc = faces[f];
     const Vec3d n = normal_of(at, fc);
     const Vec3d &a = at[static_cast<size_t>(fc.v[0])], &b = at[static_cast<size_t>(fc.v[1])], &c = at[static_cast<size_t>(fc.v[2])];
     return faces_away(*in.tree, a, b, c, n, in.mean_edge, AwayTest{0.5, 2, 8, true}) && faces_away(*in.tree, a, b, c, n, in.mean_edge, AwayTest{min_cos, 4, 64, true});
   };
   // Whether face f turned away in the fit (it did not face away before it).
-  auto turned_away = [&](size_t f) { return steep_away(pos, f, 0.1) && !steep_away(original, f, 0.0); };
+  auto turned_away = [&](size_t f) { return away_from_input(pos, f, 0.1) && !away_from_input(original, f, 0.0); };
   // A face is tested when one of its corners moved (first all at once, in parallel) and
   // again only when one is put back (-1: to test; on the 262k-face bricks at 10 %, testing
   // every face every round, one face at a time, added 30 % to `best`).
