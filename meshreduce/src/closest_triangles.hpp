@@ -98,10 +98,12 @@ class ClosestTriangles {
   // sample's nearest; -1: none), starts the search with its distance as the radius, which
   // prunes from the first node on; the answer is the same with any hint. Thread-safe.
   // With `against`: of the triangles as near as the nearest (within 1e-9 of its squared
-  // distance: triangles sharing the nearest vertex or edge), the one whose normal (cross
-  // product) has the least dot product with *against (ties: the lowest index).
+  // distance: triangles sharing the nearest vertex or edge, whose distances differ only in
+  // rounding), the one whose normal (cross product) has the least dot product with *against
+  // (ties: the lowest index). A second search with that distance fixed picks it, so the
+  // answer does not depend on the order either.
   std::pair<double, int64_t> nearest(const Vec3d& p, int64_t hint = -1, const Vec3d* against = nullptr) const {
-    Query q{this, p, std::numeric_limits<double>::infinity(), -1, 0, against, 0};
+    Query q{this, p, std::numeric_limits<double>::infinity(), -1, 0};
     if (tris_.empty()) return {q.best2, q.best};
     const Vec3d r = p - centre_;
     q.slack = 1e-6 * std::max(extent_, r.max_abs());
@@ -109,7 +111,6 @@ class ClosestTriangles {
     if (hint >= 0 && static_cast<size_t>(hint) < tris_.size()) {
       q.best2 = distance_sqr(p, tris_[static_cast<size_t>(hint)]);
       q.best = hint;
-      if (against) q.best_dot = q.dot(hint);
       radius = q.radius(q.best2);
     }
     RTCPointQuery query;
@@ -121,7 +122,13 @@ class ClosestTriangles {
     RTCPointQueryContext context;
     rtcInitPointQueryContext(&context);
     rtcPointQuery(scene_, &query, &context, &ClosestTriangles::visit, &q);
-    return {q.best2, q.best};
+    if (!against || q.best < 0) return {q.best2, q.best};
+    Ties t{this, p, q.best2 * (1 + 1e-9), *against, q.best, 0};
+    t.best_dot = t.dot(q.best);
+    query.radius = q.radius(t.within2);  // fixed: the ball holds every tie
+    rtcInitPointQueryContext(&context);
+    rtcPointQuery(scene_, &query, &context, &ClosestTriangles::visit_ties, &t);
+    return {q.best2, t.best};
   }
 
  private:
@@ -131,39 +138,48 @@ class ClosestTriangles {
     double best2;
     int64_t best;
     double slack;
-    const Vec3d* against;
-    double best_dot;  // with `against`: the best triangle's normal against it
     // The search radius for a squared distance d2: its root, plus 1e-6 of it and the slack.
     float radius(double d2) const { return static_cast<float>(std::sqrt(d2) * (1 + 1e-6) + slack); }
-    double dot(int64_t id) const {
-      const Triangle& t = self->tris_[static_cast<size_t>(id)];
-      return OpenMesh::dot(*against, OpenMesh::cross(t.b - t.a, t.c - t.a));
-    }
   };
 
   static bool visit(RTCPointQueryFunctionArguments* args) {
     Query& q = *static_cast<Query*>(args->userPtr);
     const int64_t id = args->primID;
     const double d2 = distance_sqr(q.p, q.self->tris_[static_cast<size_t>(id)]);
-    if (q.against) {
-      // Within 1e-9 of the best (the radius keeps such triangles in reach: its margin is
-      // 1e-6), the least dot product wins; nearer than that, the triangle does.
-      const double tie = 1e-9 * q.best2;
-      if (d2 > q.best2 + tie) return false;
-      const double dot = q.dot(id);
-      if (d2 >= q.best2 - tie && (dot > q.best_dot || (dot == q.best_dot && id > q.best))) return false;
-      q.best_dot = dot;
-      q.best2 = std::min(q.best2, d2);
-      q.best = id;
-    } else {
-      if (d2 > q.best2 || (d2 == q.best2 && id > q.best)) return false;
-      q.best2 = d2;
-      q.best = id;
-    }
+    if (d2 > q.best2 || (d2 == q.best2 && id > q.best)) return false;
+    q.best2 = d2;
+    q.best = id;
     const float radius = q.radius(d2);
     if (!(radius < args->query->radius)) return false;
     args->query->radius = radius;
     return true;
+  }
+
+  // nearest()'s second search: among the triangles within within2 (squared), the least dot
+  // product of the normal with `against`.
+  struct Ties {
+    const ClosestTriangles* self;
+    Vec3d p;
+    double within2;
+    Vec3d against;
+    int64_t best;
+    double best_dot;
+    double dot(int64_t id) const {
+      const Triangle& t = self->tris_[static_cast<size_t>(id)];
+      return OpenMesh::dot(against, OpenMesh::cross(t.b - t.a, t.c - t.a));
+    }
+  };
+
+  static bool visit_ties(RTCPointQueryFunctionArguments* args) {
+    Ties& t = *static_cast<Ties*>(args->userPtr);
+    const int64_t id = args->primID;
+    if (distance_sqr(t.p, t.self->tris_[static_cast<size_t>(id)]) > t.within2) return false;
+    const double dot = t.dot(id);
+    if (dot < t.best_dot || (dot == t.best_dot && id < t.best)) {
+      t.best_dot = dot;
+      t.best = id;
+    }
+    return false;
   }
 
   const std::vector<Triangle>& tris_;
