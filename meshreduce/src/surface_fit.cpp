@@ -397,7 +397,8 @@ SurfaceFitReport fit_to_surface(Mesh& mesh, const SurfaceFitTarget& target, cons
   pos = std::move(best_pos);
   // Last, every face moved against the input triangles nearest samples over it (faces_away,
   // the bench's measure of a flip, with its sampling, k up to 64, ties counted against the
-  // face, and a margin: past 84 degrees), where a coarse look (k up to 8) finds it over 60
+  // face, and a margin: past 84 degrees), where a coarse look (k up to 8, ties to the lowest
+  // index) finds it over 60
   // degrees from that input (the input's mean normal under the centroid, the trigger
   // before, missed faces on walls with twice the relief; the reduction's screen, 37
   // degrees, cost `best` 0.3 s more on the bricks at 10 % for no flip found in the sweeps:
@@ -410,7 +411,7 @@ SurfaceFitReport fit_to_surface(Mesh& mesh, const SurfaceFitTarget& target, cons
     const FaceCorners& fc = faces[f];
     const Vec3d n = normal_of(at, fc);
     const Vec3d &a = at[static_cast<size_t>(fc.v[0])], &b = at[static_cast<size_t>(fc.v[1])], &c = at[static_cast<size_t>(fc.v[2])];
-    return faces_away(*in.tree, a, b, c, n, in.mean_edge, AwayTest{0.5, 2, 8, true}) && faces_away(*in.tree, a, b, c, n, in.mean_edge, AwayTest{min_cos, 4, 64, true});
+    return faces_away(*in.tree, a, b, c, n, in.mean_edge, AwayTest{0.5, 2, 8, false}) && faces_away(*in.tree, a, b, c, n, in.mean_edge, AwayTest{min_cos, 4, 64, true});
   };
   // Whether face f turned away in the fit (it did not face away before it).
   auto turned_away = [&](size_t f) { return away_from_input(pos, f, 0.1) && !away_from_input(original, f, 0.0); };
