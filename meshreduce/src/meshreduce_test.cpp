@@ -432,6 +432,30 @@ TEST(MeshReduce, BrickWallStaysCloseAndOriented) {
   EXPECT_LE(d.hausdorff, 1.2 * w.amplitude);
 }
 
+// A point above a pyramid's apex is equally near all four faces. nearest() without a
+// direction takes the lowest index, from any hint; with one, the face whose normal points
+// most against it (the exact answer: the faces' normals differ in sign along x or y).
+TEST(ClosestTriangles, TiesGoToTheFaceMostAgainstTheDirection) {
+  using reduce::Vec3d;
+  const Vec3d apex(0, 0, 1), px(1, -1, 0), py(1, 1, 0), mx(-1, 1, 0), my(-1, -1, 0);
+  // Counter-clockwise seen from outside: faces toward +x, +y, -x, -y.
+  const std::vector<reduce::Triangle> tris = {{px, py, apex}, {py, mx, apex}, {mx, my, apex}, {my, px, apex}};
+  const reduce::ClosestTriangles set(tris);
+  const Vec3d above(0, 0, 2);
+  for (int64_t hint : {-1, 0, 1, 2, 3}) {
+    EXPECT_EQ(set.nearest(above, hint), std::make_pair(1.0, int64_t{0})) << "hint " << hint;
+    for (const auto& [dir, face] : {std::pair{Vec3d(1, 0, 0), 2}, std::pair{Vec3d(-1, 0, 0), 0}, std::pair{Vec3d(0, 1, 0), 3},
+                                    std::pair{Vec3d(0, -1, 0), 1}}) {
+      const auto [d2, id] = set.nearest(above, hint, &dir);
+      EXPECT_EQ(d2, 1.0);
+      EXPECT_EQ(id, face) << "direction (" << dir[0] << ", " << dir[1] << "), hint " << hint;
+    }
+  }
+  // Off the apex, one face is nearest, whatever the direction.
+  const Vec3d off(0.5, 0, 1), against(1, 0, 0);
+  EXPECT_EQ(set.nearest(off, -1, &against).second, 0);
+}
+
 // The faces of `low` that face against the input surface under them: their normal against
 // the sum of the area-weighted normals of the input triangles nearest to points spread over
 // the face, about one per input triangle it covers and at least 16 (the bench's flip count,
