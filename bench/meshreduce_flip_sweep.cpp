@@ -52,8 +52,9 @@ int main(int argc, char** argv) {
       ReduceReport rep;
       const Mesh low = reduce_mesh(high, o, &rep);
       const bench::FlipCount c = bench::count_flipped(input, triangle_soup(low));
-      std::printf("%d x %d wall, target %zu, %s: %zu faces, %zu flipped, %zu degenerate (%d passes, %.2f s)\n", wall.columns, wall.rows,
-                  o.target_faces, name, static_cast<size_t>(low.n_faces()), c.flipped, c.degenerate, rep.passes, rep.seconds);
+      std::printf("%d x %d wall, target %zu, %s: %zu faces, %zu flipped, %zu degenerate (%d passes, %zu reported, %.2f s)\n", wall.columns,
+                  wall.rows, o.target_faces, name, static_cast<size_t>(low.n_faces()), c.flipped, c.degenerate, rep.passes, rep.flipped_faces,
+                  rep.seconds);
       any = any || c.flipped > 0 || c.degenerate > 0;
     }
   }

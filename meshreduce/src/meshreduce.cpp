@@ -249,6 +249,7 @@ Mesh reduce_mesh(const Mesh& input, const ReduceOptions& options, ReduceReport* 
   // unfitted one, then area).
   SurfaceDistance distance[2], fit_distance[2];
   Mesh fitted[2];
+  reduce::SurfaceFitReport fit_reports[2];
   auto candidate = [&](int k) {
     distance[k] = reference->measure(outputs[k]);
     // Nothing reduced (a target at or above the input): nothing to fit. Above
@@ -264,7 +265,7 @@ Mesh reduce_mesh(const Mesh& input, const ReduceOptions& options, ReduceReport* 
     fo.max_aspect_ratio = options.max_aspect_ratio;
     fo.tethered = uv_seam_vertices(fitted[k]);
     fo.tether = static_cast<double>(options.seam_tolerance) * static_cast<double>(bounding_box(input).diagonal());
-    reduce::fit_to_surface(fitted[k], *target, fit_fixed_vertices(fitted[k], options), fo);
+    fit_reports[k] = reduce::fit_to_surface(fitted[k], *target, fit_fixed_vertices(fitted[k], options), fo);
     fit_distance[k] = reference->measure(fitted[k]);
   };
   // One after the other: each measure and fit is parallel inside, and two fits at once
@@ -285,6 +286,7 @@ Mesh reduce_mesh(const Mesh& input, const ReduceOptions& options, ReduceReport* 
   if (use_fit) {
     outputs[pick] = std::move(fitted[pick]);
     rep.tracked_error = -1;
+    rep.flipped_faces = fit_reports[pick].facing_away;
   }
   rep.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (report) *report = rep;

@@ -524,9 +524,11 @@ TEST(MeshReduce, NoFaceFacesAgainstTheInputUnderIt) {
     ReduceOptions o;
     o.target_faces = c.faces;
     o.quality = c.quality;
-    EXPECT_EQ(faces_against_input(high, reduce_mesh(high, o)), std::vector<int>{})
+    ReduceReport r;
+    EXPECT_EQ(faces_against_input(high, reduce_mesh(high, o, &r)), std::vector<int>{})
         << c.columns << " x " << c.rows << " wall, amplitude " << c.amplitude << ", " << c.faces << " faces, quality "
         << static_cast<int>(c.quality);
+    EXPECT_EQ(r.flipped_faces, 0u) << "the report agrees";
   }
 }
 

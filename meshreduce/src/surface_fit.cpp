@@ -441,6 +441,21 @@ SurfaceFitReport fit_to_surface(Mesh& mesh, const SurfaceFitTarget& target, cons
       }
     }
   }
+  // The faces left facing away from the input under them, counted as the reduction counts
+  // its own (NoFlip::flipped_faces: the coarse look below cos 0.8, then the full test below
+  // cos 0.05): those that faced away before the fit and those a put-back corner could not
+  // turn around.
+  std::vector<uint8_t> left_away(faces.size(), 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, faces.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t f = r.begin(); f < r.end(); ++f) {
+      const FaceCorners& fc = faces[f];
+      const Vec3d n = normal_of(pos, fc);
+      const Vec3d &a = pos[static_cast<size_t>(fc.v[0])], &b = pos[static_cast<size_t>(fc.v[1])], &c = pos[static_cast<size_t>(fc.v[2])];
+      left_away[f] = n.sqrnorm() > 0 && faces_away(*in.tree, a, b, c, n, in.mean_edge, AwayTest{0.8, 2, 8, false}) &&
+                     faces_away(*in.tree, a, b, c, n, in.mean_edge, AwayTest{0.05, 4, 64, true});
+    }
+  });
+  rep.facing_away = static_cast<size_t>(std::count(left_away.begin(), left_away.end(), uint8_t{1}));
   for (size_t i = 0; i < nv; ++i)
     if (unknown[i] >= 0)  // exactly representable: rounded to float above
       mesh.set_point(VertexHandle(static_cast<int>(i)), Vec3f(static_cast<float>(pos[i][0]), static_cast<float>(pos[i][1]), static_cast<float>(pos[i][2])));

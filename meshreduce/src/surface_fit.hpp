@@ -75,6 +75,9 @@ struct SurfaceFitReport {
   int iterations = 0;     // solves made
   size_t free_vertices = 0;
   size_t held_back = 0;   // vertex moves undone (summed over iterations): see fit_to_surface
+  // Faces left facing away from the input under them (the reduction's test of a flip,
+  // NoFlip::flipped_faces): those that did before the fit, none it turned.
+  size_t facing_away = 0;
 };
 
 // Moves the vertices of `mesh` (compacted: no deleted elements) whose `fixed` flag is 0

@@ -119,8 +119,9 @@ struct ReduceReport {
   size_t locked_vertices = 0;  // vertices pinned by lock_boundary and lock_groups
   // Reductions run (see the guarantees below): 1, or more where one left flipped faces.
   int passes = 1;
-  // Output faces of the (last) reduction that the bench's measure counts as flipped: 0
-  // unless every pass left some (before best's fit, which has its own repair).
+  // Output faces that the bench's measure counts as flipped (with a 3-degree margin): 0
+  // unless every pass of the reduction left some (for a fitted best output, counted after
+  // the fit).
   size_t flipped_faces = 0;
   // With ReduceQuality::best: the face-plane weighting chosen ("area" or "uniform") and the
   // measured Hausdorff distance of each candidate (area, uniform), object units.
