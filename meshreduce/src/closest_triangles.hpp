@@ -234,4 +234,19 @@ inline bool faces_away(const ClosestTriangles& set, const Vec3d& a, const Vec3d&
   return OpenMesh::dot(n, m) < test.min_cos * n.norm() * m.norm();
 }
 
+// The bench's flip test, screened: the full test (k in [4, 64] as the bench samples, ties
+// counted against the face, below min_cos) only where a coarse look (k in [2, 8], ties to the
+// lowest index) finds the face below screen_cos. Sampling every face fully cost `fast` on the
+// 262k-face bricks at 1 % a fifth to a third of its time; counting ties in the coarse look
+// too made `best` at 10 % a fifth slower and found no more flips (docs/benchmarks.md).
+inline bool faces_away_screened(const ClosestTriangles& set, const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& n, double mean_edge,
+                                double min_cos, double screen_cos) {
+  return faces_away(set, a, b, c, n, mean_edge, AwayTest{screen_cos, 2, 8, false}) && faces_away(set, a, b, c, n, mean_edge, AwayTest{min_cos, 4, 64, true});
+}
+
+// A face that the reductions and best's fit report as flipped (ReduceReport::flipped_faces):
+// faces_away_screened below cos 0.05 (3 degrees short of the bench's flip), screened at cos
+// 0.8 (at 0.5 the screen let a flip through on the 96 x 48 wall at 3x relief).
+constexpr double kFlippedCos = 0.05, kFlippedScreenCos = 0.8;
+
 }  // namespace meso::reduce

@@ -199,13 +199,8 @@ class NoFlip final : public CollapseModule {
   }
 
   // The faces of the loop's mesh (live, non-degenerate) flipped as bench/meshreduce_peers
-  // counts a flip, or within 3 degrees of it: their normal against the input triangles
-  // nearest to samples over them (faces_away, k in [4, 64] as the bench's, below cos 0.05,
-  // ties counted against the face), for the faces a coarser sampling finds over 37 degrees
-  // from that input (below cos 0.8, k in [2, 8]: on the 262k-face bricks at 1 % the full
-  // sampling of every face cost a fifth to a third of `fast`; below cos 0.5, the screen let
-  // a flip through on the 96 x 48 wall at 3x relief). In face order; the faces are tested in
-  // parallel.
+  // counts a flip, or within 3 degrees of it (faces_away_screened at kFlippedCos). In face
+  // order; the faces are tested in parallel.
   std::vector<FlipBall> flipped_faces(const CollapseLoop& loop) {
     ensure_surface();
     const Mesh& m = loop.mesh();
@@ -219,8 +214,7 @@ class NoFlip final : public CollapseModule {
     tbb::parallel_for(size_t{0}, tris.size(), [&](size_t i) {
       const auto& [a, b, c] = tris[i];
       const Vec3d n = OpenMesh::cross(b - a, c - a);
-      flipped[i] = n.sqrnorm() > 0 && reduce::faces_away(*surface_->nearest, a, b, c, n, surface_->mean_edge, kScreen) &&
-                   reduce::faces_away(*surface_->nearest, a, b, c, n, surface_->mean_edge, kFlipped);
+      flipped[i] = n.sqrnorm() > 0 && faces_away_screened(*surface_->nearest, a, b, c, n, surface_->mean_edge, kFlippedCos, kFlippedScreenCos);
     });
     std::vector<FlipBall> out;
     for (size_t i = 0; i < tris.size(); ++i)
@@ -229,12 +223,10 @@ class NoFlip final : public CollapseModule {
   }
 
  private:
-  // faces_away's tests: steep faces in allow(), refused past 84 degrees; every face in the
-  // strict balls, sampled as the bench samples; flipped_faces() samples a face so only where
-  // a coarse look (kScreen) finds it steep. The full tests count the worst of tied
-  // triangles (a flip whichever the bench picks; in the screen too, it made `best` on the
-  // bricks at 10 % a fifth slower and found no more flips in the sweeps).
-  static constexpr AwayTest kSteepTest{0.1, 2, 16, false}, kFullTest{0.1, 4, 64, true}, kScreen{0.8, 2, 8, false}, kFlipped{0.05, 4, 64, true};
+  // allow()'s tests, refused past 84 degrees: steep faces; every face in the strict balls,
+  // sampled as the bench samples, the worst of tied triangles counted (a flip whichever the
+  // bench picks).
+  static constexpr AwayTest kSteepTest{0.1, 2, 16, false}, kFullTest{0.1, 4, 64, true};
 
   static FlipBall ball(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
     const Vec3d g = (a + b + c) / 3.0;

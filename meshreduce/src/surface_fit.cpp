@@ -395,13 +395,11 @@ SurfaceFitReport fit_to_surface(Mesh& mesh, const SurfaceFitTarget& target, cons
     pos = std::move(next);
   }
   pos = std::move(best_pos);
-  // Last, every face moved against the input triangles nearest samples over it (faces_away,
-  // the bench's measure of a flip, with its sampling, k up to 64, ties counted against the
-  // face, and a margin: past 84 degrees), where a coarse look (k up to 8, ties to the lowest
-  // index) finds it over 60
-  // degrees from that input (the input's mean normal under the centroid, the trigger
-  // before, missed faces on walls with twice the relief; the reduction's screen, 37
-  // degrees, cost `best` 0.3 s more on the bricks at 10 % for no flip found in the sweeps:
+  // Last, every face moved against the input triangles nearest samples over it
+  // (faces_away_screened, the bench's measure of a flip with a margin: past 84 degrees),
+  // screened at 60 degrees (the reduction's screen, 37 degrees, cost `best` 0.3 s more on
+  // the bricks at 10 % and found no more flips in the sweeps; the trigger before, the
+  // input's mean normal under the centroid, missed faces on walls with twice the relief:
   // docs/benchmarks.md). The checks above test the centroid only: a face that
   // now faces away and did not before the fit gets its corners back where the fit found
   // them. So does any face that this makes unacceptable (every state the iterations kept is
@@ -410,8 +408,8 @@ SurfaceFitReport fit_to_surface(Mesh& mesh, const SurfaceFitTarget& target, cons
   auto away_from_input = [&](const std::vector<Vec3d>& at, size_t f, double min_cos) {
     const FaceCorners& fc = faces[f];
     const Vec3d n = normal_of(at, fc);
-    const Vec3d &a = at[static_cast<size_t>(fc.v[0])], &b = at[static_cast<size_t>(fc.v[1])], &c = at[static_cast<size_t>(fc.v[2])];
-    return faces_away(*in.tree, a, b, c, n, in.mean_edge, AwayTest{0.5, 2, 8, false}) && faces_away(*in.tree, a, b, c, n, in.mean_edge, AwayTest{min_cos, 4, 64, true});
+    return faces_away_screened(*in.tree, at[static_cast<size_t>(fc.v[0])], at[static_cast<size_t>(fc.v[1])], at[static_cast<size_t>(fc.v[2])], n,
+                               in.mean_edge, min_cos, 0.5);
   };
   // Whether face f turned away in the fit (it did not face away before it).
   auto turned_away = [&](size_t f) { return away_from_input(pos, f, 0.1) && !away_from_input(original, f, 0.0); };
@@ -442,17 +440,15 @@ SurfaceFitReport fit_to_surface(Mesh& mesh, const SurfaceFitTarget& target, cons
     }
   }
   // The faces left facing away from the input under them, counted as the reduction counts
-  // its own (NoFlip::flipped_faces: the coarse look below cos 0.8, then the full test below
-  // cos 0.05): those that faced away before the fit and those a put-back corner could not
-  // turn around.
+  // its own (NoFlip::flipped_faces): those that faced away before the fit and those a
+  // put-back corner could not turn around.
   std::vector<uint8_t> left_away(faces.size(), 0);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, faces.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t f = r.begin(); f < r.end(); ++f) {
       const FaceCorners& fc = faces[f];
       const Vec3d n = normal_of(pos, fc);
-      const Vec3d &a = pos[static_cast<size_t>(fc.v[0])], &b = pos[static_cast<size_t>(fc.v[1])], &c = pos[static_cast<size_t>(fc.v[2])];
-      left_away[f] = n.sqrnorm() > 0 && faces_away(*in.tree, a, b, c, n, in.mean_edge, AwayTest{0.8, 2, 8, false}) &&
-                     faces_away(*in.tree, a, b, c, n, in.mean_edge, AwayTest{0.05, 4, 64, true});
+      left_away[f] = n.sqrnorm() > 0 && faces_away_screened(*in.tree, pos[static_cast<size_t>(fc.v[0])], pos[static_cast<size_t>(fc.v[1])],
+                                                            pos[static_cast<size_t>(fc.v[2])], n, in.mean_edge, kFlippedCos, kFlippedScreenCos);
     }
   });
   rep.facing_away = static_cast<size_t>(std::count(left_away.begin(), left_away.end(), uint8_t{1}));
