@@ -477,7 +477,7 @@ size_t CollapseLoop::run(Progress& progress) {
   const uint64_t step = std::max<uint64_t>(1, total / 200);
   const size_t start_faces = faces_;
   uint64_t reported = 0;
-  progress.begin("meshreduce", total);
+  progress.begin(options_.label, total);
   size_t collapses = 0;
   Candidate c;
   while (faces_ > target && !heap_.empty()) {

@@ -110,6 +110,9 @@ struct LoopOptions {
   bool lazy = false;
   // Face planes weighted by the mean face area instead of each face's own area (ReduceQuality::best).
   bool uniform_planes = false;
+  // The progress bar's label: "meshreduce", or "meshreduce, pass N" when a reduction that
+  // left flipped faces runs again (meshreduce.cpp).
+  std::string label = "meshreduce";
 };
 
 class CollapseLoop {

@@ -15,6 +15,7 @@
 #include <limits>
 #include <memory>
 #include <stdexcept>
+#include <string>
 
 namespace meso {
 
@@ -100,7 +101,7 @@ std::vector<uint8_t> fit_fixed_vertices(const Mesh& mesh, const ReduceOptions& o
 // One reduction with the given face-plane weighting (LoopOptions::uniform_planes): every
 // new face within the `strict` balls is tested against the input (NoFlip), and `flipped`
 // receives the output faces that the bench would count as flipped.
-Mesh reduce_once(const Mesh& input, const ReduceOptions& options, bool uniform_planes, ReduceReport* report, Progress& progress,
+Mesh reduce_once(const Mesh& input, const ReduceOptions& options, bool uniform_planes, int pass, ReduceReport* report, Progress& progress,
                  ProgressiveMesh* progressive, reduce::InputSurface* surface, const std::vector<reduce::FlipBall>& strict,
                  std::vector<reduce::FlipBall>& flipped) {
   using namespace reduce;
@@ -141,6 +142,7 @@ Mesh reduce_once(const Mesh& input, const ReduceOptions& options, bool uniform_p
     lo.seam_weight = options.seam_weight;
     lo.lazy = options.quality == ReduceQuality::fast;
     lo.uniform_planes = uniform_planes;
+    if (pass > 1) lo.label = "meshreduce, pass " + std::to_string(pass);
     CollapseLoop loop(mesh, lo);
     if (progressive) loop.record(progressive);
     // Locks first: the cheapest test, and the one that explains a target out of reach.
@@ -203,7 +205,7 @@ Mesh reduce_without_flips(const Mesh& input, const ReduceOptions& options, bool 
   ReduceReport rep;
   Mesh out;
   for (int pass = 1;; ++pass) {
-    out = reduce_once(input, options, uniform_planes, &rep, pass == 1 ? progress : null_progress(), progressive, &surface, strict, flipped);
+    out = reduce_once(input, options, uniform_planes, pass, &rep, progress, progressive, &surface, strict, flipped);
     rep.passes = pass;
     rep.flipped_faces = flipped.size();
     if (flipped.empty() || pass == kMaxPasses) break;

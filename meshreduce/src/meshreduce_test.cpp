@@ -505,7 +505,16 @@ std::vector<int> faces_against_input(const Mesh& high, const Mesh& low) {
 // trigger still faced away (7 over 15 reductions); now a reduction that leaves any runs
 // again, testing every new face around them. A regression test at the budgets that failed,
 // not a proof.
+// The labels of the progress phases begun.
+struct LabelLog final : Progress {
+  std::vector<std::string> labels;
+  void begin(const std::string& label, uint64_t) override { labels.push_back(label); }
+  void advance(uint64_t) override {}
+  void end() override {}
+};
+
 TEST(MeshReduce, NoFaceFacesAgainstTheInputUnderIt) {
+  bool rerun = false;
   struct Case {
     int columns, rows;
     ReduceQuality quality;
@@ -525,11 +534,21 @@ TEST(MeshReduce, NoFaceFacesAgainstTheInputUnderIt) {
     o.target_faces = c.faces;
     o.quality = c.quality;
     ReduceReport r;
-    EXPECT_EQ(faces_against_input(high, reduce_mesh(high, o, &r)), std::vector<int>{})
+    LabelLog bar;
+    EXPECT_EQ(faces_against_input(high, reduce_mesh(high, o, &r, bar)), std::vector<int>{})
         << c.columns << " x " << c.rows << " wall, amplitude " << c.amplitude << ", " << c.faces << " faces, quality "
         << static_cast<int>(c.quality);
     EXPECT_EQ(r.flipped_faces, 0u) << "the report agrees";
+    // The bar follows every pass (best: the first of its two reductions, which may not be
+    // the one picked, so its count is not the report's).
+    if (c.quality != ReduceQuality::best) {
+      std::vector<std::string> expected = {"meshreduce"};
+      for (int pass = 2; pass <= r.passes; ++pass) expected.push_back("meshreduce, pass " + std::to_string(pass));
+      EXPECT_EQ(bar.labels, expected);
+      rerun |= r.passes > 1;
+    }
   }
+  EXPECT_TRUE(rerun) << "a case that needs a second pass";
 }
 
 // A tight normal-deviation bound stops reduction where faces would have to replace faces
