@@ -15,7 +15,22 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <stdexcept>
+#include <string>
 #include <unordered_map>
+
+// assimp checks its own invariants with ai_assert, which Debian's build keeps and which
+// aborts the process by default: a truncated PLY whose header announces more faces than it
+// holds trips TriangulateProcess's check (exit 134, no message of meso's). libassimp calls
+// this function through its PLT, so the executable's definition takes the place of the
+// library's (upstream's setAiAssertHandler is neither exported nor installed here): it
+// throws, and read_mesh reports the file as unreadable (exit 3).
+namespace Assimp {
+void aiAssertViolation(const char* expression, const char* file, int line);
+void aiAssertViolation(const char* expression, const char* file, int line) {
+  throw std::runtime_error(std::string("inconsistent data (assimp's check '") + expression + "' failed at " + file + ":" + std::to_string(line) + ")");
+}
+}  // namespace Assimp
 
 namespace meso {
 
@@ -99,9 +114,15 @@ Mesh read_mesh(const fs::path& path, MeshReadReport* report) {
   importer.SetPropertyBool(AI_CONFIG_IMPORT_COLLADA_IGNORE_UP_DIRECTION, true);
   // Triangulate polygons in place; keep everything else as the file has it (no welding by
   // assimp, which would also merge corners we want to keep, no reordering).
-  const aiScene* scene = importer.ReadFile(name, aiProcess_Triangulate | aiProcess_ValidateDataStructure);
+  const aiScene* scene = nullptr;
+  std::string err;
+  try {
+    scene = importer.ReadFile(name, aiProcess_Triangulate | aiProcess_ValidateDataStructure);
+  } catch (const std::exception& e) {  // aiAssertViolation's, if assimp lets it through
+    err = e.what();
+  }
   if (!scene || !scene->mRootNode) {
-    std::string err = importer.GetErrorString();
+    if (err.empty()) err = importer.GetErrorString();
     err = err.substr(0, err.find('\n'));
     throw InputError(name, "cannot read mesh: " + (err.empty() ? std::string("unknown format") : err));
   }

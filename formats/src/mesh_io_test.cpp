@@ -147,6 +147,21 @@ TEST(MeshIo, GarbageIsAnInputError) {
   EXPECT_THROW(read_mesh(dir / "empty.obj"), InputError);
 }
 
+// A PLY cut short after three of its nine vertices trips one of assimp's own assertions,
+// which aborted the process: it is an unreadable file like any other.
+TEST(MeshIo, TruncatedPlyIsAnInputErrorNotAnAbort) {
+  test::TempDir dir;
+  test::write_text(dir / "cut.ply",
+                   "ply\nformat ascii 1.0\nelement vertex 9\nproperty float x\nproperty float y\nproperty float z\n"
+                   "element face 8\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n");
+  try {
+    read_mesh(dir / "cut.ply");
+    FAIL() << "a truncated PLY must be refused";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("cut.ply"), std::string::npos) << e.what();
+  }
+}
+
 TEST(MeshIo, NanCoordinateIsAnInputError) {
   test::TempDir dir;
   test::write_text(dir / "nan.obj", "v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n");
