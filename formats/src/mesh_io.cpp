@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -240,7 +241,7 @@ namespace {
 
 void write_with_openmesh(const Mesh& mesh, const fs::path& path, OpenMesh::IO::Options opt) {
   const SilenceOpenMesh silence;
-  // 9 significant digits: every float survives the text round trip.
+  // (Binary PLY only: the precision argument matters to OpenMesh's text writers, not used.)
   if (!OpenMesh::IO::write_mesh(mesh, path.string(), opt, 9))
     throw InternalError(path.string() + ": cannot write mesh");
 }
@@ -269,6 +270,90 @@ void write_ply(const Mesh& mesh, const fs::path& path) {
   if (mesh.has_vertex_normals()) opt += OpenMesh::IO::Options::VertexNormal;
   if (uv) opt += OpenMesh::IO::Options::VertexTexCoord;
   write_with_openmesh(out, path, opt);
+}
+
+// OBJ, written here rather than by OpenMesh, whose writer prints a fixed number of decimals
+// (9: a mesh at a scale of 1e-6 kept one or two significant digits, one at 1e-30 none).
+// Numbers are the shortest text that reads back as the same float (std::to_chars), so every
+// coordinate round-trips bit for bit at any scale. `v` (and `vn`) per vertex in handle order,
+// `vt` per distinct corner UV in order of first use, faces in order from each face's first
+// corner (the to-vertex of its halfedge).
+void write_obj(const Mesh& mesh, const fs::path& path) {
+  std::ofstream out(path, std::ios::binary);
+  if (!out) throw InternalError(path.string() + ": cannot open for writing");
+  const bool uv = has_uvs(mesh), normals = mesh.has_vertex_normals();
+  std::string text;
+  auto flush = [&] {
+    out.write(text.data(), static_cast<std::streamsize>(text.size()));
+    text.clear();
+  };
+  auto number = [&](float x) {
+    char buf[32];
+    const auto r = std::to_chars(buf, buf + sizeof buf, x);
+    text += ' ';
+    text.append(buf, r.ptr);
+  };
+  auto index = [&](size_t i) {
+    char buf[24];
+    const auto r = std::to_chars(buf, buf + sizeof buf, i + 1);
+    text.append(buf, r.ptr);
+  };
+  text = "# " + std::to_string(mesh.n_vertices()) + " vertices, " + std::to_string(mesh.n_faces()) + " faces\n";
+  std::vector<size_t> vindex(mesh.n_vertices(), 0);
+  size_t nv = 0;
+  for (auto v : mesh.vertices()) {
+    vindex[static_cast<size_t>(v.idx())] = nv++;
+    const Vec3f p = mesh.point(v);
+    text += 'v';
+    for (int k = 0; k < 3; ++k) number(p[k]);
+    text += '\n';
+    if (normals) {
+      const Vec3f n = mesh.normal(v);
+      text += "vn";
+      for (int k = 0; k < 3; ++k) number(n[k]);
+      text += '\n';
+    }
+    if (text.size() > (1u << 20)) flush();
+  }
+  // Corner UVs, deduplicated by their bits (so -0 and 0 stay apart, as they were).
+  std::vector<size_t> tindex;
+  if (uv) {
+    std::unordered_map<uint64_t, size_t> seen;
+    tindex.assign(mesh.n_halfedges(), 0);
+    for (auto f : mesh.faces())
+      for (auto h : face_halfedges(mesh, f)) {
+        const Vec2f t = mesh.texcoord2D(h);
+        uint32_t bits[2];
+        std::memcpy(bits, t.data(), sizeof bits);
+        const auto [it, inserted] = seen.try_emplace((uint64_t{bits[0]} << 32) | bits[1], seen.size());
+        tindex[static_cast<size_t>(h.idx())] = it->second;
+        if (!inserted) continue;
+        text += "vt";
+        number(t[0]);
+        number(t[1]);
+        text += '\n';
+        if (text.size() > (1u << 20)) flush();
+      }
+  }
+  for (auto f : mesh.faces()) {
+    text += 'f';
+    for (auto h : face_halfedges(mesh, f)) {
+      const size_t v = vindex[static_cast<size_t>(mesh.to_vertex_handle(h).idx())];
+      text += ' ';
+      index(v);
+      if (uv || normals) text += '/';
+      if (uv) index(tindex[static_cast<size_t>(h.idx())]);
+      if (normals) {
+        text += '/';
+        index(v);
+      }
+    }
+    text += '\n';
+    if (text.size() > (1u << 20)) flush();
+  }
+  flush();
+  out.close();  // flush now: a full disk shows here, not after the file is committed
+  if (!out) throw InternalError(path.string() + ": write failed");
 }
 
 void base64(const std::vector<uint8_t>& in, std::string& out) {
@@ -403,24 +488,7 @@ void write_gltf(const Mesh& mesh, const fs::path& path, bool binary) {
 void write_mesh(const Mesh& mesh, const fs::path& path) {
   const std::string e = lower_ext(path);
   if (e == ".obj") {
-    OpenMesh::IO::Options opt;
-    if (mesh.has_vertex_normals()) opt += OpenMesh::IO::Options::VertexNormal;
-    if (!has_uvs(mesh)) {
-      write_with_openmesh(mesh, path, opt);
-      return;
-    }
-    opt += OpenMesh::IO::Options::FaceTexCoord;
-    // OpenMesh's OBJ writer emits the texcoord of every halfedge, boundary halfedges too:
-    // they belong to no face, so nothing sets theirs, and OpenMesh leaves a new property
-    // entry uninitialised. Garbage reached the file as extra `vt` lines, and a NaN among
-    // them broke the ordering of the writer's texcoord map, so a face corner could get a
-    // wrong index (valgrind on Cli.FramesWritesACurvatureMap; once, "OBJ: Invalid face
-    // index" on reading). So a copy is written, with each boundary halfedge given the
-    // texcoord of its opposite halfedge, which is a face corner's UV and already in the file.
-    Mesh copy = mesh;
-    for (auto h : copy.halfedges())
-      if (copy.is_boundary(h)) copy.set_texcoord2D(h, copy.texcoord2D(copy.opposite_halfedge_handle(h)));
-    write_with_openmesh(copy, path, opt);
+    write_obj(mesh, path);
   } else if (e == ".ply") {
     write_ply(mesh, path);
   } else if (e == ".gltf" || e == ".glb") {

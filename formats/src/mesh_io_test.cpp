@@ -55,6 +55,36 @@ TEST_P(MeshRoundTrip, KeepsPositionsFaceOrderAndSeams) {
 
 INSTANTIATE_TEST_SUITE_P(Formats, MeshRoundTrip, ::testing::Values(".obj", ".ply", ".gltf", ".glb"));
 
+// OBJ is text: every float must read back bit for bit whatever its scale (OpenMesh's writer
+// printed nine decimals, which left a mesh at 1e-6 one or two significant digits and one at
+// 1e-30 only zeros). Positions with full mantissas at scales from 1e-12 to 1e7, UVs too.
+// (At 1e-30 the text is exact but assimp's fast reader rounds some values by an ulp.)
+TEST(MeshIo, ObjKeepsEveryFloatAtAnyScale) {
+  test::TempDir dir;
+  for (const double scale : {1e-12, 1.2345678e-6, 0.37, 1.0, 3.3e3, 1.7e7}) {
+    Mesh m = test::make_seamed_cube();
+    for (auto v : m.vertices()) {
+      const Vec3f p = m.point(v);
+      m.set_point(v, Vec3f(static_cast<float>((p[0] + 0.1234567) * scale), static_cast<float>((p[1] - 0.7654321) * scale),
+                           static_cast<float>((p[2] + 1.0 / 3.0) * scale)));
+    }
+    for (auto h : m.halfedges()) {
+      const Vec2f t = m.texcoord2D(h);
+      m.set_texcoord2D(h, Vec2f(t[0] / 3.0f + 0.01f, t[1] / 7.0f + 0.3f));
+    }
+    const auto path = dir / "scaled.obj";
+    write_mesh(m, path);
+    const Mesh back = read_mesh(path);
+    const auto a = corners(m), b = corners(back);
+    ASSERT_EQ(a.size(), b.size()) << "scale " << scale;
+    for (size_t f = 0; f < a.size(); ++f)
+      for (size_t k = 0; k < 3; ++k) {
+        EXPECT_EQ(a[f][k].first, b[f][k].first) << "scale " << scale << ", face " << f;
+        EXPECT_EQ(a[f][k].second, b[f][k].second) << "scale " << scale << ", face " << f;
+      }
+  }
+}
+
 // OpenMesh leaves a new halfedge's texcoord uninitialised, and nothing sets a boundary
 // halfedge's (it has no face, so no corner). OpenMesh's OBJ writer reads them anyway (valgrind
 // showed its texcoord map keyed by uninitialised floats), so whatever garbage they hold reached
