@@ -186,6 +186,8 @@ TEST(Cli, BadUsageExitsTwo) {
   EXPECT_EQ(run("preview base.obj --maps d --headless --png p.png --pan 0.5,inf").code, 2);
   EXPECT_EQ(run("meshreduce in.obj -o out.obj --ratio nan").code, 2);
   EXPECT_EQ(run("streams sdf h.exr -o s.exr --relief inf").code, 2);
+  EXPECT_EQ(run("streams cone h.exr -o c.exr --tolerance nan").code, 2);
+  EXPECT_EQ(run("streams cone h.exr -o c.png").code, 2) << "streams are EXR: refused before any work";
 }
 
 TEST(Cli, BadInputExitsThreeWithOneLineNamingTheFileAndNoOutput) {
@@ -196,6 +198,11 @@ TEST(Cli, BadInputExitsThreeWithOneLineNamingTheFileAndNoOutput) {
   // Non-manifold (import warns) and without UVs (bake fails): still exactly one line.
   test::write_text(dir / "fan.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 1 0 1\nf 1 2 3\nf 2 4 3\nf 2 3 5\n");
   test::write_text(dir / "nan.exr", "");
+  // Finite heights whose span overflows float: they cannot be normalised (were NaN, exit 4).
+  Image wide(4, 4, 1, 0.0f);
+  wide.at(0, 0) = -3e38f;
+  wide.at(3, 3) = 3e38f;
+  write_image(wide, dir / "wide.exr", PixelFormat::float32);
   struct Case {
     std::string args, file;
   };
@@ -211,9 +218,12 @@ TEST(Cli, BadInputExitsThreeWithOneLineNamingTheFileAndNoOutput) {
       {"bake --low " + (dir / "fan.obj").string() + " --high " + (dir / "nouv.obj").string() + " -o " +
            (dir / "maps").string() + " --size 16",
        "fan.obj"},
-      {"streams pyramid " + (dir / "nan.exr").string() + " -o " + (dir / "o.png").string(), "nan.exr"},
-      {"streams relaxed-cone " + (dir / "nan.exr").string() + " -o " + (dir / "o.png").string(), "nan.exr"},
-      {"streams dilate-erode " + (dir / "nan.exr").string() + " -o " + (dir / "o.png").string() + " --radius 1", "nan.exr"},
+      {"streams pyramid " + (dir / "nan.exr").string() + " -o " + (dir / "o.exr").string(), "nan.exr"},
+      {"streams relaxed-cone " + (dir / "nan.exr").string() + " -o " + (dir / "o.exr").string(), "nan.exr"},
+      {"streams dilate-erode " + (dir / "nan.exr").string() + " -o " + (dir / "o.exr").string() + " --radius 1", "nan.exr"},
+      {"streams cone " + (dir / "wide.exr").string() + " -o " + (dir / "o.exr").string(), "wide.exr"},
+      {"streams sdf " + (dir / "wide.exr").string() + " -o " + (dir / "o.exr").string(), "wide.exr"},
+      {"meshreduce --from-progressive " + dir.path().string() + " --faces 10 -o " + out, "is a folder"},
   };
   for (const auto& c : cases) {
     const Result r = run(c.args);
@@ -222,6 +232,7 @@ TEST(Cli, BadInputExitsThreeWithOneLineNamingTheFileAndNoOutput) {
     EXPECT_NE(r.err.find(c.file), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(out));
     EXPECT_FALSE(fs::exists(dir / "o.png"));
+    EXPECT_FALSE(fs::exists(dir / "o.exr"));
     EXPECT_TRUE(!fs::exists(dir / "maps") || fs::is_empty(dir / "maps")) << "no partial bake output";
   }
 }

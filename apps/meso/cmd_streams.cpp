@@ -12,6 +12,7 @@
 #include "meso/bake/displacement_stream.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <filesystem>
 #include <cmath>
@@ -32,7 +33,14 @@ CLI::App* add_stream_subcommand(CLI::App* streams, const std::string& name, cons
                                 const std::string& output_help, StreamArgs& a) {
   CLI::App* sub = streams->add_subcommand(name, what);
   sub->add_option("height", a.input, "Height map: EXR/PNG/TIFF, channel 0 (e.g. meso bake's displacement.exr)")->required();
-  sub->add_option("-o,--output", a.output, output_help)->required();
+  // Every stream is an EXR (docs/formats.md): say so before the work, not when writing.
+  sub->add_option("-o,--output", a.output, output_help)->required()->check(CLI::Validator(
+      [](std::string& path) -> std::string {
+        std::string ext = std::filesystem::path(path).extension().string();
+        for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+        return ext == ".exr" ? std::string() : path + ": streams are written as EXR (use a .exr name)";
+      },
+      "EXR"));
   auto* wrap = sub->add_flag("--wrap", a.wrap, "The map tiles: lookups wrap around the borders");
   sub->add_flag("--clamp", a.clamp, "Lookups clamp to the edge texels (the default)")->excludes(wrap);
   sub->add_flag("--half", a.half, "Store half floats instead of float32");
@@ -40,7 +48,10 @@ CLI::App* add_stream_subcommand(CLI::App* streams, const std::string& name, cons
 }
 
 HeightField load_height_field(const StreamArgs& a) {
-  return make_height_field(read_image(a.input), a.wrap ? Border::wrap : Border::clamp);
+  HeightField field = make_height_field(read_image(a.input), a.wrap ? Border::wrap : Border::clamp);
+  // Finite heights whose span is not (e.g. -3e38 and 3e38) cannot be normalised in float.
+  if (!std::isfinite(field.scale)) throw InputError(a.input, "its heights span more than the float range; rescale the map");
+  return field;
 }
 
 
@@ -127,7 +138,7 @@ void add_streams(CLI::App& app, Context& ctx) {
                 : "Conservative cone map (Dummer), exact for the bilinear surface: no point of it inside any cone",
         "Output EXR (MIP-mapped: R = height, G = cone ratio, B = apex height)", *cone_args);
     cone->add_option("--tolerance", *tolerance, "Relative gap allowed below the exact ratio (the stored one is never wider)")
-        ->check(CLI::Range(1e-6, 0.5))
+        ->check(CLI::Range(1e-6, 0.5) & Finite)
         ->capture_default_str();
     if (relaxed)
       cone->add_option("--fans", *fans,

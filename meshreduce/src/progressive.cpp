@@ -225,8 +225,10 @@ void write_progressive(const ProgressiveMesh& pm, const std::filesystem::path& p
 
 ProgressiveMesh read_progressive(const std::filesystem::path& path) {
   const std::string name = path.string();
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw InputError(name, "is a folder, not a progressive mesh (.pm)");
   std::ifstream f(path, std::ios::binary);
-  if (!f) throw InputError(name, "cannot open");
+  if (!f) throw InputError(name, std::filesystem::exists(path, ec) ? "cannot open" : "no such file");
   const std::string data((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
   if (f.bad()) throw InputError(name, "cannot read");
   const auto* bytes = reinterpret_cast<const unsigned char*>(data.data());
