@@ -198,6 +198,7 @@ TEST(Cli, BadInputExitsThreeWithOneLineNamingTheFileAndNoOutput) {
   // Non-manifold (import warns) and without UVs (bake fails): still exactly one line.
   test::write_text(dir / "fan.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 1 0 1\nf 1 2 3\nf 2 4 3\nf 2 3 5\n");
   test::write_text(dir / "nan.exr", "");
+  test::write_text(dir / "flatuv.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0.5 0.5\nf 1/1 2/1 3/1\n");
   // Finite heights whose span overflows float: they cannot be normalised (were NaN, exit 4).
   Image wide(4, 4, 1, 0.0f);
   wide.at(0, 0) = -3e38f;
@@ -221,6 +222,8 @@ TEST(Cli, BadInputExitsThreeWithOneLineNamingTheFileAndNoOutput) {
       {"streams pyramid " + (dir / "nan.exr").string() + " -o " + (dir / "o.exr").string(), "nan.exr"},
       {"streams relaxed-cone " + (dir / "nan.exr").string() + " -o " + (dir / "o.exr").string(), "nan.exr"},
       {"streams dilate-erode " + (dir / "nan.exr").string() + " -o " + (dir / "o.exr").string() + " --radius 1", "nan.exr"},
+      {"bake --low " + (dir / "flatuv.obj").string() + " --high " + (dir / "nouv.obj").string() + " -o " + (dir / "maps").string() + " --size 16",
+       "flatuv.obj"},
       {"streams cone " + (dir / "wide.exr").string() + " -o " + (dir / "o.exr").string(), "wide.exr"},
       {"streams sdf " + (dir / "wide.exr").string() + " -o " + (dir / "o.exr").string(), "wide.exr"},
       {"meshreduce --from-progressive " + dir.path().string() + " --faces 10 -o " + out, "is a folder"},

@@ -182,6 +182,9 @@ void add_bake(CLI::App& app, Context& ctx) {
       const auto start = std::chrono::steady_clock::now();
       BakeResult r = bake(low, high, o, progress);
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      // Maps of nothing (every UV triangle degenerate, or off the map) are an input error, not
+      // a bake with no misses (--max-miss-rate cannot see them: its rate is of covered texels).
+      if (r.covered_texels == 0) throw InputError(args->low, "its UV triangles cover no texel of the map (degenerate or outside [0, 1])");
       const PixelFormat png_format = args->png_bits == 8 ? PixelFormat::uint8 : PixelFormat::uint16;
       const std::filesystem::path dir(args->out_dir);
       OutputSet outputs;
