@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <optional>
@@ -38,6 +39,14 @@ ErrorTarget parse_error(const std::string& text, const char* option = "--error")
   return t;
 }
 
+// Six significant digits at any scale (std::to_string's fixed six decimals print a distance
+// of 1e-9 as 0.000000).
+std::string short_number(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
 // `measured`: the distance reduce_mesh already measured (--quality best), else measured here.
 void add_distance(nlohmann::json& report, Globals& g, const Mesh& input, const Mesh& out, double diagonal,
                   const std::optional<SurfaceDistance>& measured) {
@@ -51,7 +60,10 @@ void add_distance(nlohmann::json& report, Globals& g, const Mesh& input, const M
                      {"output_to_input", d.backward},
                      {"samples", d.samples_a + d.samples_b},
                      {"seconds", d.seconds}};
-  info(g, "Hausdorff distance " + std::to_string(d.hausdorff) + " (" + std::to_string(d.hausdorff * pct) + " % of the diagonal)");
+  if (std::isfinite(d.hausdorff) && std::isfinite(d.hausdorff * pct))
+    info(g, "Hausdorff distance " + short_number(d.hausdorff) + " (" + short_number(d.hausdorff * pct) + " % of the diagonal)");
+  else
+    warn(g, "the Hausdorff distance could not be measured (coordinates beyond the measure's float range)");
 }
 
 // The regions of the output farther than `threshold` from the input (object units).
@@ -73,8 +85,8 @@ void add_regions(nlohmann::json& report, Globals& g, const Mesh& input, const Me
   }
   report["regions"] = {{"threshold", threshold}, {"count", regions.size()}, {"faces", over}, {"largest", list}};
   if (!regions.empty())
-    warn(g, std::to_string(regions.size()) + " regions (" + std::to_string(over) + " faces) are farther than " + std::to_string(threshold) +
-                " from the input; the worst, " + std::to_string(regions[0].max_distance) + ", around face " +
+    warn(g, std::to_string(regions.size()) + " regions (" + std::to_string(over) + " faces) are farther than " + short_number(threshold) +
+                " from the input; the worst, " + short_number(regions[0].max_distance) + ", around face " +
                 std::to_string(regions[0].first_face) + " (see --json's regions)");
 }
 
