@@ -564,7 +564,10 @@ TEST(MeshReduce, ReversedDuplicateFacesAreNotFlips) {
   std::vector<FaceHandle> faces(in.faces().begin(), in.faces().end());
   for (size_t i = 0; i < 500; ++i) {
     std::vector<VertexHandle> copy;
-    for (auto h : face_halfedges(in, faces[i])) copy.push_back(in.add_vertex(in.point(in.to_vertex_handle(h))));
+    for (auto h : face_halfedges(in, faces[i])) {
+      const Vec3f p = in.point(in.to_vertex_handle(h));  // a copy: add_vertex may move the points
+      copy.push_back(in.add_vertex(p));
+    }
     std::reverse(copy.begin(), copy.end());
     ASSERT_TRUE(in.add_face(copy).is_valid());
   }
