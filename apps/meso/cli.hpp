@@ -56,6 +56,9 @@ void parse_size(const std::string& text, int& width, int& height);
 // The whole of `text` as a finite number, or false (nothing is thrown).
 bool parse_finite(const std::string& text, float& value);
 
+// A path's extension in lower case, with its dot (".exr"; "" for none).
+std::string lower_extension(const std::string& path);
+
 }  // namespace meso::cli
 
 #include "meso/core/mesh.hpp"

@@ -33,8 +33,7 @@ void add_frames(CLI::App& app, Context& ctx) {
         // OBJ and PLY have no place for per-corner tangents or per-vertex curvatures: writing
         // one would drop everything this command computes and still succeed, so it is refused
         // as a bad value (exit 2) before any work.
-        std::string ext = std::filesystem::path(args->output).extension().string();
-        std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+        const std::string ext = lower_extension(args->output);
         if (ext != ".gltf" && ext != ".glb")
           throw UsageError(args->output + ": " + ext.substr(1) + " cannot hold tangent frames or curvatures; write .gltf or .glb");
       }
@@ -42,9 +41,7 @@ void add_frames(CLI::App& app, Context& ctx) {
       const bool want_map = !args->curvature_map.empty();
       if (want_map) {
         parse_size(args->size, map_options.width, map_options.height);
-        std::string ext = std::filesystem::path(args->curvature_map).extension().string();
-        std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-        if (ext != ".exr") throw UsageError(args->curvature_map + ": the curvature map is a float EXR (use .exr)");
+        if (lower_extension(args->curvature_map) != ".exr") throw UsageError(args->curvature_map + ": the curvature map is a float EXR (use .exr)");
       }
       nlohmann::json in_report;
       Mesh mesh = load_mesh(ctx.globals, args->input, in_report);

@@ -12,7 +12,6 @@
 #include "meso/bake/displacement_stream.hpp"
 
 #include <algorithm>
-#include <cctype>
 #include <chrono>
 #include <filesystem>
 #include <cmath>
@@ -36,9 +35,7 @@ CLI::App* add_stream_subcommand(CLI::App* streams, const std::string& name, cons
   // Every stream is an EXR (docs/formats.md): say so before the work, not when writing.
   sub->add_option("-o,--output", a.output, output_help)->required()->check(CLI::Validator(
       [](std::string& path) -> std::string {
-        std::string ext = std::filesystem::path(path).extension().string();
-        for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-        return ext == ".exr" ? std::string() : path + ": streams are written as EXR (use a .exr name)";
+        return lower_extension(path) == ".exr" ? std::string() : path + ": streams are written as EXR (use a .exr name)";
       },
       "EXR"));
   auto* wrap = sub->add_flag("--wrap", a.wrap, "The map tiles: lookups wrap around the borders");

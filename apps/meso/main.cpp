@@ -9,8 +9,10 @@
 #include <tbb/global_control.h>
 #include <unistd.h>
 
+#include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <optional>
 
@@ -38,6 +40,12 @@ const CLI::Validator Finite(
       return "'" + text + "' is not a finite number";
     },
     "FINITE");
+
+std::string lower_extension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
 
 bool parse_finite(const std::string& text, float& value) {
   size_t used = 0;
