@@ -502,7 +502,7 @@ struct Eye {
 Eye eye_of(const Mesh& base, const PreviewCamera& cam) {
   const Box3 box = bounding_box(base);
   const auto c = box.center();
-  const double radius = std::max(0.5 * static_cast<double>(box.diagonal()), 1e-30);
+  const double radius = std::max(0.5 * box.diagonal(), 1e-30);
   const double a = std::clamp(static_cast<double>(cam.view_angle), 0.0, 89.9) * kPi / 180.0, az = cam.azimuth * kPi / 180.0;
   const double fov = 40.0 * kPi / 180.0;
   const double dist = radius / std::sin(0.5 * fov) / std::max(static_cast<double>(cam.zoom), 1e-3);

@@ -63,7 +63,7 @@ void add_distance(nlohmann::json& report, Globals& g, const Mesh& input, const M
   if (std::isfinite(d.hausdorff) && std::isfinite(d.hausdorff * pct))
     info(g, "Hausdorff distance " + short_number(d.hausdorff) + " (" + short_number(d.hausdorff * pct) + " % of the diagonal)");
   else
-    warn(g, "the Hausdorff distance could not be measured (coordinates beyond the measure's float range)");
+    warn(g, "the Hausdorff distance could not be measured (it came out non-finite)");
 }
 
 // The regions of the output farther than `threshold` from the input (object units).

@@ -154,7 +154,7 @@ Mesh reduce_once(const Mesh& input, const ReduceOptions& options, bool uniform_p
     if (options.lock_boundary) lock("lock_boundary", boundary_vertices(mesh));
     if (!options.lock_groups.empty()) lock("lock_group", group_vertices(mesh, options.lock_groups));
     rep.locked_vertices = static_cast<size_t>(std::count(pinned.begin(), pinned.end(), uint8_t{1}));
-    const double diagonal = static_cast<double>(bounding_box(mesh).diagonal()) * loop.scale();
+    const double diagonal = bounding_box(mesh).diagonal() * loop.scale();
     loop.add(std::make_unique<ChartGuard>(loop, options.boundary_tolerance * diagonal, options.seam_tolerance * diagonal,
                                           options.uv_tolerance));
     if (lo.has_uvs) loop.add(std::make_unique<UvFoldGuard>());
@@ -266,7 +266,7 @@ Mesh reduce_mesh(const Mesh& input, const ReduceOptions& options, ReduceReport* 
     reduce::SurfaceFitOptions fo;
     fo.max_aspect_ratio = options.max_aspect_ratio;
     fo.tethered = uv_seam_vertices(fitted[k]);
-    fo.tether = static_cast<double>(options.seam_tolerance) * static_cast<double>(bounding_box(input).diagonal());
+    fo.tether = static_cast<double>(options.seam_tolerance) * bounding_box(input).diagonal();
     fit_reports[k] = reduce::fit_to_surface(fitted[k], *target, fit_fixed_vertices(fitted[k], options), fo);
     fit_distance[k] = reference->measure(fitted[k]);
   };

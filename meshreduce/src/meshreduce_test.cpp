@@ -859,7 +859,7 @@ TEST(MeshReduce, BestFitMovesSeamVerticesWithinTheSeamTolerance) {
       seams.emplace_back(reduce::point(high.point(high.from_vertex_handle(high.halfedge_handle(e, 0)))),
                          reduce::point(high.point(high.to_vertex_handle(high.halfedge_handle(e, 0)))));
   ASSERT_FALSE(seams.empty());
-  const double diagonal = static_cast<double>(bounding_box(high).diagonal());
+  const double diagonal = bounding_box(high).diagonal();
   for (const size_t faces : {size_t{100}}) {
     ReduceOptions o;
     o.target_faces = faces;
@@ -975,6 +975,37 @@ TEST(SurfaceDistance, KnownDistances) {
   EXPECT_NEAR(h.backward, 0.0, 1e-6);
   EXPECT_NEAR(h.hausdorff, 0.5, 1e-6);
   EXPECT_EQ(measure(a, half).rms, h.rms) << "deterministic";
+}
+
+// The measure at the ends of float's range: a mesh pair scaled by 2^100 (about 1.3e30) or
+// 2^-100 gives the unit pair's figures times the scale, bit for bit (power-of-two scaling is
+// exact); before, Embree's float distances made them inf at 1e30 and 0 at 1e-30. The same
+// for the per-face distances, and for a scale that is no power of two (1e30, 1e-30), within
+// float rounding of the coordinates.
+TEST(SurfaceDistance, AnyScaleAFloatCanHold) {
+  Mesh a = test::make_grid(4, 4), b = test::make_grid(3, 3, 0.5f, 1.0f);
+  for (auto v : b.vertices()) b.set_point(v, b.point(v) + Vec3f(0, 0, 0.25f * b.point(v)[0]));
+  const SurfaceDistance unit = measure(a, b);
+  const std::vector<double> unit_faces = face_distances(a, b);
+  ASSERT_GT(unit.forward, 0.1);
+  ASSERT_GT(unit.backward, 0.01);
+  auto scaled = [](Mesh m, double s) {
+    for (auto v : m.vertices()) m.set_point(v, Vec3f(OpenMesh::Vec3d(m.point(v)) * s));
+    return m;
+  };
+  for (const double s : {0x1p100, 0x1p-100, 1e30, 1e-30}) {
+    const Mesh sa = scaled(a, s), sb = scaled(b, s);
+    const SurfaceDistance d = measure(sa, sb);
+    const std::vector<double> faces = face_distances(sa, sb);
+    const bool exact = std::ilogb(s) == std::log2(s);
+    const double tol = exact ? 0.0 : 1e-6;
+    EXPECT_NEAR(d.forward / s, unit.forward, tol * unit.forward) << s;
+    EXPECT_NEAR(d.backward / s, unit.backward, tol * unit.backward) << s;
+    EXPECT_NEAR(d.rms / s, unit.rms, tol * unit.rms) << s;
+    ASSERT_EQ(faces.size(), unit_faces.size());
+    for (size_t f = 0; f < faces.size(); ++f) EXPECT_NEAR(faces[f] / s, unit_faces[f], tol * unit.hausdorff) << s << " face " << f;
+    EXPECT_NEAR(bounding_box(sa).diagonal() / s, bounding_box(a).diagonal(), 1e-6 * bounding_box(a).diagonal()) << s;
+  }
 }
 
 // One reference, several meshes measured against it (concurrently, too): the same figures as

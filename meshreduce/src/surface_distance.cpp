@@ -42,28 +42,50 @@ struct Random {
   double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
 };
 
-Triangle triangle(const TriangleSoup& m, const std::array<uint32_t, 3>& t) {
-  return Triangle{point(m.points[t[0]]), point(m.points[t[1]]), point(m.points[t[2]])};
+// The measure works on coordinates scaled by a power of two that brings a's largest
+// coordinate into [0.5, 1): Embree's BVH squares distances in float, which overflows for a
+// mesh near 1e30 and underflows to 0 near 1e-30. A power of two scales every double and
+// float operation below exactly (sums, products, square roots, the BVH's float corners), so
+// the figures are those of the unscaled computation, bit for bit, wherever that one was
+// finite, and are finite now at any scale a float can hold.
+struct UnitScale {
+  double to_unit = 1, from_unit = 1;
+  UnitScale() = default;
+  explicit UnitScale(const TriangleSoup& a) {
+    float largest = 0;
+    for (const Vec3f& p : a.points)
+      for (int j = 0; j < 3; ++j)
+        if (std::isfinite(p[j])) largest = std::max(largest, std::abs(p[j]));
+    if (!(largest > 0)) return;
+    const int e = std::ilogb(largest) + 1;  // largest / 2^e in [0.5, 1)
+    to_unit = std::ldexp(1.0, -e);
+    from_unit = std::ldexp(1.0, e);
+  }
+  Vec3d operator()(const Vec3f& p) const { return point(p) * to_unit; }
+};
+
+Triangle triangle(const TriangleSoup& m, const std::array<uint32_t, 3>& t, const UnitScale& s) {
+  return Triangle{s(m.points[t[0]]), s(m.points[t[1]]), s(m.points[t[2]])};
 }
 
-std::vector<Triangle> triangles(const TriangleSoup& m) {
+std::vector<Triangle> triangles(const TriangleSoup& m, const UnitScale& s) {
   std::vector<Triangle> out;
   out.reserve(m.triangles.size());
   for (const auto& t : m.triangles) {
-    const Triangle tri = triangle(m, t);
+    const Triangle tri = triangle(m, t, s);
     if (!tri.degenerate()) out.push_back(tri);
   }
   return out;
 }
 
 // Every point used by a triangle, plus `n` points spread over the triangles by area.
-std::vector<Vec3d> sample(const TriangleSoup& m, const std::vector<Triangle>& tris, size_t n, uint64_t seed) {
+std::vector<Vec3d> sample(const TriangleSoup& m, const std::vector<Triangle>& tris, size_t n, uint64_t seed, const UnitScale& s) {
   std::vector<Vec3d> out;
   std::vector<char> used(m.points.size(), 0);
   for (const auto& t : m.triangles)
     for (const uint32_t i : t) used[i] = 1;
   for (size_t i = 0; i < m.points.size(); ++i)
-    if (used[i]) out.push_back(point(m.points[i]));
+    if (used[i]) out.push_back(s(m.points[i]));
   double total = 0;
   for (const auto& t : tris) total += t.area();
   if (!(total > 0)) return out;
@@ -142,6 +164,7 @@ size_t sample_count(const SurfaceDistanceOptions& options, size_t faces_a, size_
 struct SurfaceDistanceReference::Impl {
   SurfaceDistanceOptions options;
   TriangleSoup soup;  // a, to sample again for a b with more faces (the count depends on both)
+  UnitScale scale;  // a's, applied to b too
   std::vector<Triangle> triangles;
   std::unique_ptr<ClosestTriangles> tree;  // over `triangles`
   size_t samples_n = 0;  // a's samples for any b with at most as many faces as a
@@ -153,9 +176,10 @@ SurfaceDistanceReference::SurfaceDistanceReference(const TriangleSoup& a, const 
   Impl& r = *impl_;
   r.options = options;
   r.soup = a;
-  r.triangles = triangles(a);
+  r.scale = UnitScale(a);
+  r.triangles = triangles(a, r.scale);
   r.samples_n = sample_count(options, a.triangles.size(), a.triangles.size());
-  r.samples = sample(a, r.triangles, r.samples_n, options.seed);
+  r.samples = sample(a, r.triangles, r.samples_n, options.seed, r.scale);
   r.tree = std::make_unique<ClosestTriangles>(r.triangles);  // built now: measure() is const and may run concurrently
 }
 
@@ -171,14 +195,15 @@ SurfaceDistance SurfaceDistanceReference::measure(const TriangleSoup& b) const {
   const Impl& r = *impl_;
   const size_t n = sample_count(r.options, r.soup.triangles.size(), b.triangles.size());
   std::vector<Vec3d> resampled;
-  if (n != r.samples_n) resampled = sample(r.soup, r.triangles, n, r.options.seed);
+  if (n != r.samples_n) resampled = sample(r.soup, r.triangles, n, r.options.seed, r.scale);
   const std::vector<Vec3d>& sa = n != r.samples_n ? resampled : r.samples;
-  const std::vector<Triangle> tb = triangles(b);
-  const std::vector<Vec3d> sb = sample(b, tb, n, r.options.seed + 1);
+  const std::vector<Triangle> tb = triangles(b, r.scale);
+  const std::vector<Vec3d> sb = sample(b, tb, n, r.options.seed + 1, r.scale);
   const ClosestTriangles tree_b(tb);
   SurfaceDistance d;
   distances(sa, tree_b, d.forward, d.rms_forward);
   distances(sb, *r.tree, d.backward, d.rms_backward);
+  for (double* x : {&d.forward, &d.rms_forward, &d.backward, &d.rms_backward}) *x *= r.scale.from_unit;
   d.hausdorff = std::max(d.forward, d.backward);
   d.samples_a = sa.size();
   d.samples_b = sb.size();
@@ -200,11 +225,12 @@ SurfaceDistance measure_surface_distance(const TriangleSoup& a, const TriangleSo
 std::vector<double> face_distances(const Mesh& a, const Mesh& b, const SurfaceDistanceOptions& options) {
   const TriangleSoup sa = triangle_soup(a), sb = triangle_soup(b);
   const size_t n = sample_count(options, sa.triangles.size(), sb.triangles.size());
-  const std::vector<Triangle> ta = triangles(sa);
+  const UnitScale scale(sa);
+  const std::vector<Triangle> ta = triangles(sa, scale);
   // b's triangles, the degenerate ones included (they keep distance 0), in face order.
   std::vector<Triangle> tb;
   tb.reserve(sb.triangles.size());
-  for (const auto& t : sb.triangles) tb.push_back(triangle(sb, t));
+  for (const auto& t : sb.triangles) tb.push_back(triangle(sb, t, scale));
   std::vector<Triangle> tb_live;
   std::vector<size_t> live_face;
   for (size_t f = 0; f < tb.size(); ++f)
@@ -239,18 +265,18 @@ std::vector<double> face_distances(const Mesh& a, const Mesh& b, const SurfaceDi
         const double r1 = std::sqrt(rng.uniform()), r2 = rng.uniform();
         at(1 - r1, r1 * (1 - r2), r1 * r2);
       }
-      out[live_face[i]] = std::sqrt(worst);
+      out[live_face[i]] = std::sqrt(worst) * scale.from_unit;
     }
   });
   // a's samples, attributed to the face of b nearest to them.
-  const std::vector<Vec3d> pa = sample(sa, ta, n, options.seed);
+  const std::vector<Vec3d> pa = sample(sa, ta, n, options.seed, scale);
   std::vector<std::pair<double, size_t>> nearest(pa.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, pa.size(), 2048), [&](const tbb::blocked_range<size_t>& r) {
     int64_t hint = -1;
     for (size_t i = r.begin(); i < r.end(); ++i) {
       const auto [d2, id] = tree_b.nearest(pa[i], hint);
       // id < 0 only for a sample no triangle is near (a NaN coordinate): attributed nowhere.
-      nearest[i] = {std::sqrt(d2), id >= 0 ? live_face[static_cast<size_t>(id)] : SIZE_MAX};
+      nearest[i] = {std::sqrt(d2) * scale.from_unit, id >= 0 ? live_face[static_cast<size_t>(id)] : SIZE_MAX};
       if (id >= 0) hint = id;
     }
   });

@@ -39,7 +39,7 @@ CameraPose frame_camera(const Mesh& base, const PreviewCamera& cam, float aspect
   const Vec3d e2 = OpenMesh::cross(n, e1);
   const Box3 box = bounding_box(base);
   const Vec3d center = OpenMesh::vector_cast<Vec3d>(box.center());
-  const double radius = std::max(0.5 * static_cast<double>(box.diagonal()), 1e-30);
+  const double radius = std::max(0.5 * box.diagonal(), 1e-30);
   const double pi = 3.14159265358979323846;
   const double a = std::clamp(static_cast<double>(cam.view_angle), 0.0, 89.9) * pi / 180.0;
   const double az = static_cast<double>(cam.azimuth) * pi / 180.0;

@@ -17,6 +17,7 @@
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -44,7 +45,13 @@ using HalfedgeHandle = Mesh::HalfedgeHandle;
 struct Box3 {
   Vec3f lo{0, 0, 0};
   Vec3f hi{0, 0, 0};
-  float diagonal() const { return (hi - lo).norm(); }
+  // In double, and returned as double: a float sum of squares underflows to 0 for a box near
+  // 1e-30 across and overflows near 1e19, and a box near FLT_MAX across has a diagonal no
+  // float holds.
+  double diagonal() const {
+    const double x = double(hi[0]) - lo[0], y = double(hi[1]) - lo[1], z = double(hi[2]) - lo[2];
+    return std::sqrt(x * x + y * y + z * z);
+  }
   Vec3f center() const { return (lo + hi) * 0.5f; }
 };
 
