@@ -204,6 +204,16 @@ TEST(Cli, BadInputExitsThreeWithOneLineNamingTheFileAndNoOutput) {
   wide.at(0, 0) = -3e38f;
   wide.at(3, 3) = 3e38f;
   write_image(wide, dir / "wide.exr", PixelFormat::float32);
+  // Cut short: a float TIFF (libtiff reports the short strip, yet OIIO's read succeeded with
+  // zeros), a PNG's pixels and a PNG's header (libpng printed its own lines besides meso's).
+  Image waves(64, 64, 1);
+  for (size_t i = 0; i < waves.pixels.size(); ++i) waves.pixels[i] = 0.5f + 0.5f * std::sin(0.37f * float(i % 64) + 0.11f * float(i / 64));
+  write_image(waves, dir / "cut.tif", PixelFormat::float32);
+  write_image(waves, dir / "cut.png", PixelFormat::uint16);
+  fs::copy_file(dir / "cut.png", dir / "head.png");
+  fs::resize_file(dir / "cut.tif", fs::file_size(dir / "cut.tif") / 2);
+  fs::resize_file(dir / "cut.png", fs::file_size(dir / "cut.png") / 2);
+  fs::resize_file(dir / "head.png", 30);
   struct Case {
     std::string args, file;
   };
@@ -226,6 +236,9 @@ TEST(Cli, BadInputExitsThreeWithOneLineNamingTheFileAndNoOutput) {
        "flatuv.obj"},
       {"streams cone " + (dir / "wide.exr").string() + " -o " + (dir / "o.exr").string(), "wide.exr"},
       {"streams sdf " + (dir / "wide.exr").string() + " -o " + (dir / "o.exr").string(), "wide.exr"},
+      {"streams cone " + (dir / "cut.tif").string() + " -o " + (dir / "o.exr").string(), "cut.tif: cannot read image data"},
+      {"streams cone " + (dir / "cut.png").string() + " -o " + (dir / "o.exr").string(), "cut.png: cannot read image data"},
+      {"streams cone " + (dir / "head.png").string() + " -o " + (dir / "o.exr").string(), "head.png: cannot read image"},
       {"meshreduce --from-progressive " + dir.path().string() + " --faces 10 -o " + out, "is a folder"},
   };
   for (const auto& c : cases) {

@@ -6,6 +6,9 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -31,6 +34,43 @@ std::vector<T> quantize(const LargeVector<float>& px, float max_value) {
 }
 
 
+// OpenImageIO 2.4's PNG reader keeps libpng's default error handler, which prints
+// "libpng error: ..." to stderr before OIIO reports the same error through geterror(): a
+// damaged PNG would get two lines besides meso's one. So while a PNG is opened or decoded,
+// stderr points at /dev/null (images are read on the calling thread only; the error itself
+// still reaches the user, through geterror()).
+class QuietStderr {
+ public:
+  explicit QuietStderr(bool quiet) {
+    if (!quiet) return;
+    std::fflush(stderr);
+    saved_ = ::dup(2);
+    const int null = ::open("/dev/null", O_WRONLY | O_CLOEXEC);
+    if (saved_ >= 0 && null >= 0) ::dup2(null, 2);
+    if (null >= 0) ::close(null);
+  }
+  ~QuietStderr() {
+    if (saved_ < 0) return;
+    std::fflush(stderr);
+    ::dup2(saved_, 2);
+    ::close(saved_);
+  }
+  QuietStderr(const QuietStderr&) = delete;
+  QuietStderr& operator=(const QuietStderr&) = delete;
+
+ private:
+  int saved_ = -1;
+};
+
+bool is_png(const fs::path& path) {
+  unsigned char magic[4] = {};
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) return false;
+  const size_t n = std::fread(magic, 1, sizeof magic, f);
+  std::fclose(f);
+  return n == 4 && magic[0] == 0x89 && magic[1] == 'P' && magic[2] == 'N' && magic[3] == 'G';
+}
+
 std::unique_ptr<OIIO::ImageInput> open_input(const fs::path& path) {
   const std::string name = path.string();
   if (!fs::exists(path)) throw InputError(name, "no such file");
@@ -38,7 +78,11 @@ std::unique_ptr<OIIO::ImageInput> open_input(const fs::path& path) {
   // premultiply on read (and not to divide on write), which would also lose precision.
   OIIO::ImageSpec config;
   config.attribute("oiio:UnassociatedAlpha", 1);
-  auto in = OIIO::ImageInput::open(name, &config);
+  std::unique_ptr<OIIO::ImageInput> in;
+  {
+    const QuietStderr quiet(is_png(path));
+    in = OIIO::ImageInput::open(name, &config);
+  }
   if (!in) {
     std::string err = OIIO::geterror();
     if (err.empty()) err = "not an image file OpenImageIO can read";
@@ -54,10 +98,16 @@ Image read_level(OIIO::ImageInput& in, const std::string& name, int level, int s
   if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0 || spec.depth > 1)
     throw InputError(name, "unsupported image layout");
   Image img(spec.width, spec.height, spec.nchannels);
-  if (!in.read_image(subimage, level, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, img.pixels.data())) {
-    const std::string err = in.geterror();
-    throw InputError(name, "cannot read image data: " + err.substr(0, err.find('\n')));
+  bool read = false;
+  {
+    const QuietStderr quiet(std::string(in.format_name()) == "png");
+    read = in.read_image(subimage, level, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, img.pixels.data());
   }
+  // A truncated TIFF strip is reported through geterror() while read_image() still returns
+  // true, with the missing rows left at zero: any pending error fails the read.
+  const std::string err = in.geterror();
+  if (!read || !err.empty())
+    throw InputError(name, "cannot read image data: " + (err.empty() ? std::string("unknown error") : err.substr(0, err.find('\n'))));
   for (const auto& p : spec.extra_attribs) {
     const std::string key = p.name().string();
     if (key.rfind(kPrefix, 0) != 0) continue;

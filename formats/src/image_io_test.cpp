@@ -7,6 +7,8 @@
 
 #include <cmath>
 #include <ctime>
+#include <filesystem>
+#include <string>
 
 namespace meso {
 namespace {
@@ -92,6 +94,23 @@ TEST(ImageIo, MissingAndGarbageFilesAreInputErrors) {
   EXPECT_THROW(read_image(dir / "missing.exr"), InputError);
   test::write_text(dir / "garbage.png", "not a png");
   EXPECT_THROW(read_image(dir / "garbage.png"), InputError);
+}
+
+// A float TIFF cut short: libtiff reports the missing strip, but OpenImageIO's read_image()
+// still returns true with those rows at zero; the reader must refuse it.
+TEST(ImageIo, TruncatedFilesAreInputErrors) {
+  test::TempDir dir;
+  for (const char* name : {"cut.tif", "cut.exr", "cut.png"}) {
+    write_image(ramp(64, 64, 1), dir / name, std::string(name).find(".png") != std::string::npos ? PixelFormat::uint16 : PixelFormat::float32);
+    EXPECT_NO_THROW(read_image(dir / name)) << name;
+    std::filesystem::resize_file(dir / name, std::filesystem::file_size(dir / name) * 2 / 3);
+    try {
+      read_image(dir / name);
+      ADD_FAILURE() << name << ": a truncated image must be refused";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("cannot read image data"), std::string::npos) << e.what();
+    }
+  }
 }
 
 TEST(ImageIo, WritesAreDeterministic) {
