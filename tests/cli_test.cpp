@@ -198,6 +198,7 @@ TEST(Cli, BadInputExitsThreeWithOneLineNamingTheFileAndNoOutput) {
   // Non-manifold (import warns) and without UVs (bake fails): still exactly one line.
   test::write_text(dir / "fan.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 1 0 1\nf 1 2 3\nf 2 4 3\nf 2 3 5\n");
   test::write_text(dir / "nan.exr", "");
+  test::write_text(dir / "nanuv.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nvt nan 0\nvt 1 1\nf 1/1 2/2 3/3\n");
   test::write_text(dir / "flatuv.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0.5 0.5\nf 1/1 2/1 3/1\n");
   // Finite heights whose span overflows float: they cannot be normalised (were NaN, exit 4).
   Image wide(4, 4, 1, 0.0f);
@@ -236,6 +237,7 @@ TEST(Cli, BadInputExitsThreeWithOneLineNamingTheFileAndNoOutput) {
        "flatuv.obj"},
       {"streams cone " + (dir / "wide.exr").string() + " -o " + (dir / "o.exr").string(), "wide.exr"},
       {"streams sdf " + (dir / "wide.exr").string() + " -o " + (dir / "o.exr").string(), "wide.exr"},
+      {"uvpack check " + (dir / "nanuv.obj").string() + " --size 16 -o " + (dir / "o.png").string(), "nanuv.obj: line 5"},
       {"streams cone " + (dir / "cut.tif").string() + " -o " + (dir / "o.exr").string(), "cut.tif: cannot read image data"},
       {"streams cone " + (dir / "cut.png").string() + " -o " + (dir / "o.exr").string(), "cut.png: cannot read image data"},
       {"streams cone " + (dir / "head.png").string() + " -o " + (dir / "o.exr").string(), "head.png: cannot read image"},

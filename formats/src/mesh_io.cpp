@@ -18,6 +18,7 @@
 #include <fstream>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <unordered_map>
 
 // assimp checks its own invariants with ai_assert, which Debian's build keeps and which
@@ -86,6 +87,71 @@ std::string lower_ext(const fs::path& p) {
   return e;
 }
 
+// assimp's OBJ reader turns a texture coordinate it cannot parse ("nan", "inf", "0,5") into 0,
+// and when a face names a texture coordinate the file does not have it drops every UV of the
+// file, without a word either time: a bake would then read a wrong or missing mapping. So an
+// OBJ's `vt` values and the texture indices of its `f` lines are checked first, naming the
+// line (one pass over the file, about 1.5 s per GB).
+void check_obj_texcoords(const fs::path& path, const std::string& name) {
+  std::ifstream in(path, std::ios::binary);
+  std::string text;
+  text.resize(static_cast<size_t>(fs::file_size(path)));
+  if (!in.read(text.data(), static_cast<std::streamsize>(text.size()))) throw InputError(name, "cannot read the file");
+  const auto blank = [](char c) { return c == ' ' || c == '\t' || c == '\r'; };
+  long long texcoords = 0, largest = 0;
+  size_t line = 0, largest_line = 0;
+  std::string largest_token;
+  for (const char *p = text.data(), *end = p + text.size(); p < end;) {
+    const char* eol = static_cast<const char*>(std::memchr(p, '\n', static_cast<size_t>(end - p)));
+    if (!eol) eol = end;
+    ++line;
+    const char* q = p;
+    p = eol + 1;
+    while (q < eol && blank(*q)) ++q;
+    const bool vt = eol - q > 2 && q[0] == 'v' && q[1] == 't' && blank(q[2]);
+    const bool f = eol - q > 1 && q[0] == 'f' && blank(q[1]);
+    if (!vt && !f) continue;
+    const char* stop = static_cast<const char*>(std::memchr(q, '#', static_cast<size_t>(eol - q)));
+    if (!stop) stop = eol;
+    q += vt ? 2 : 1;
+    const std::string where = "line " + std::to_string(line);
+    while (q < stop) {
+      while (q < stop && blank(*q)) ++q;
+      const char* t = q;
+      while (q < stop && !blank(*q)) ++q;
+      if (t == q) break;
+      const std::string_view token(t, static_cast<size_t>(q - t));
+      if (vt) {
+        const char* a = t + (*t == '+' ? 1 : 0);
+        double value = 0;
+        const auto [ptr, ec] = std::from_chars(a, q, value);
+        if (ec != std::errc() || ptr != q || !std::isfinite(value))
+          throw InputError(name, where + ": texture coordinate '" + std::string(token) + "' is not a finite number");
+        continue;
+      }
+      // v, v/vt, v/vt/vn or v//vn: only the vt index is checked here (assimp checks v's).
+      const size_t slash = token.find('/');
+      if (slash == std::string_view::npos || slash + 1 >= token.size() || token[slash + 1] == '/') continue;
+      const char* a = t + slash + 1;
+      long long index = 0;
+      const auto [ptr, ec] = std::from_chars(a, q, index);
+      // A negative index counts back from the latest `vt` (-1 is the latest); a positive one
+      // may name a `vt` further down (assimp resolves them after the whole file), so the
+      // largest is checked at the end.
+      const bool parsed = ec == std::errc() && (ptr == q || *ptr == '/');
+      if (!parsed || index == 0 || (index < 0 && texcoords + index < 0))
+        throw InputError(name, where + ": face corner '" + std::string(token) + "' names texture coordinate " +
+                                   std::string(a, ptr == a ? q : ptr) + ", but the file has " + std::to_string(texcoords) +
+                                   " before it");
+      if (index > largest) largest = index, largest_line = line, largest_token = token;
+    }
+    if (vt) ++texcoords;
+  }
+  if (largest > texcoords)
+    throw InputError(name, "line " + std::to_string(largest_line) + ": face corner '" + largest_token + "' names texture coordinate " +
+                               std::to_string(largest) + ", but the file has " + std::to_string(texcoords));
+}
+
 // One input mesh instanced by one node, with the node's accumulated transform.
 struct Instance {
   const aiMesh* mesh;
@@ -109,6 +175,7 @@ Mesh read_mesh(const fs::path& path, MeshReadReport* report) {
   const std::string name = path.string();
   if (!fs::exists(path)) throw InputError(name, "no such file");
   if (fs::is_directory(path)) throw InputError(name, "is a folder, not a mesh file");
+  if (lower_ext(path) == ".obj") check_obj_texcoords(path, name);
   Assimp::Importer importer;
   // Coordinates are the file's own: a COLLADA up_axis is not turned into a rotation, so a
   // .dae base mesh and an .obj high mesh of one asset stay aligned.

@@ -192,6 +192,43 @@ TEST(MeshIo, TruncatedPlyIsAnInputErrorNotAnAbort) {
   }
 }
 
+// assimp reads an unparsable `vt` value as 0 and, when a face names a `vt` the file lacks,
+// drops every UV of the file: both are refused, naming the line.
+TEST(MeshIo, ObjTextureCoordinatesAreCheckedNotRepaired) {
+  test::TempDir dir;
+  const std::string quad = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n";
+  struct Case {
+    std::string file, text, message;
+  };
+  const std::vector<Case> bad = {
+      {"nan.obj", quad + "vt 0 0\nvt nan 0\nvt 1 1\nf 1/1 2/2 3/3\n", "line 6: texture coordinate 'nan' is not a finite number"},
+      {"inf.obj", quad + "vt 0 0\nvt 1 -inf\nvt 1 1\nf 1/1 2/2 3/3\n", "line 6: texture coordinate '-inf'"},
+      {"comma.obj", quad + "vt 0 0\nvt 0,5 0\nvt 1 1\nf 1/1 2/2 3/3\n", "line 6: texture coordinate '0,5'"},
+      {"range.obj", quad + "vt 0 0\nvt 1 0\nvt 1 1\nf 1/1 2/2 3/3\nf 1/1 3/3 4/9/1\n",
+       "line 9: face corner '4/9/1' names texture coordinate 9, but the file has 3"},
+      {"zero.obj", quad + "vt 0 0\nvt 1 0\nvt 1 1\nf 1/0 2/2 3/3\n", "line 8: face corner '1/0'"},
+      {"back.obj", quad + "vt 0 0\nf 1/-1 2/-2 3/-1\n", "line 6: face corner '2/-2' names texture coordinate -2, but the file has 1 before it"},
+  };
+  for (const auto& c : bad) {
+    test::write_text(dir / c.file, c.text);
+    try {
+      read_mesh(dir / c.file);
+      ADD_FAILURE() << c.file << " must be refused";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find((dir / c.file).string() + ": " + c.message), std::string::npos) << e.what();
+    }
+  }
+  // Valid: relative indices, `vt` after the faces that name it, comments, v//vn corners, '+'.
+  test::write_text(dir / "ok.obj", quad + "vn 0 0 1\nvt 0 0\nvt 1 0 # two\nf 1/-2 2/-1 3/3\nvt +1 1 0\nvt 0 1\nf 1//1 3//1 4//1\n");
+  const Mesh m = read_mesh(dir / "ok.obj");
+  ASSERT_EQ(m.n_faces(), 2u);
+  ASSERT_TRUE(m.has_halfedge_texcoords2D());
+  bool saw_third = false;
+  for (auto h : m.halfedges())
+    if (!m.is_boundary(h) && m.texcoord2D(h) == Vec2f(1, 1)) saw_third = true;
+  EXPECT_TRUE(saw_third) << "the forward-referenced vt 3 is (1, 1)";
+}
+
 TEST(MeshIo, NanCoordinateIsAnInputError) {
   test::TempDir dir;
   test::write_text(dir / "nan.obj", "v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n");
