@@ -12,14 +12,17 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <string_view>
 #include <unordered_map>
+#include <vector>
 
 // assimp checks its own invariants with ai_assert, which Debian's build keeps and which
 // aborts the process by default: a truncated PLY whose header announces more faces than it
@@ -87,16 +90,21 @@ std::string lower_ext(const fs::path& p) {
   return e;
 }
 
+// The whole file, for the checks below.
+std::string file_text(const fs::path& path, const std::string& name) {
+  std::ifstream in(path, std::ios::binary);
+  std::string text;
+  text.resize(static_cast<size_t>(fs::file_size(path)));
+  if (!in.read(text.data(), static_cast<std::streamsize>(text.size()))) throw InputError(name, "cannot read the file");
+  return text;
+}
+
 // assimp's OBJ reader turns a texture coordinate it cannot parse ("nan", "inf", "0,5") into 0,
 // and when a face names a texture coordinate the file does not have it drops every UV of the
 // file, without a word either time: a bake would then read a wrong or missing mapping. So an
 // OBJ's `vt` values and the texture indices of its `f` lines are checked first, naming the
 // line (one pass over the file, about 1.5 s per GB).
-void check_obj_texcoords(const fs::path& path, const std::string& name) {
-  std::ifstream in(path, std::ios::binary);
-  std::string text;
-  text.resize(static_cast<size_t>(fs::file_size(path)));
-  if (!in.read(text.data(), static_cast<std::streamsize>(text.size()))) throw InputError(name, "cannot read the file");
+void check_obj_texcoords(const std::string& text, const std::string& name) {
   const auto blank = [](char c) { return c == ' ' || c == '\t' || c == '\r'; };
   long long texcoords = 0, largest = 0;
   size_t line = 0, largest_line = 0;
@@ -152,6 +160,69 @@ void check_obj_texcoords(const fs::path& path, const std::string& name) {
                                std::to_string(largest) + ", but the file has " + std::to_string(texcoords));
 }
 
+// assimp's ASCII PLY reader, given fewer elements than the header announces, makes up the
+// missing ones (a face short of the count comes back as a copy of the last): the file is
+// cut short and is refused. The body is walked token by token, as the header's elements and
+// properties lay it out (a list property: its count, then that many values).
+void check_ascii_ply(const std::string& text, const std::string& name) {
+  const size_t header_end = text.find("end_header");
+  if (text.compare(0, 3, "ply") != 0 || header_end == std::string::npos) return;  // assimp says what is wrong
+  struct Element {
+    std::string name;
+    long long count = 0;
+    std::vector<bool> lists;  // per property: a list?
+  };
+  std::vector<Element> elements;
+  bool ascii = false;
+  size_t pos = 0;
+  while (pos < header_end) {
+    size_t eol = text.find('\n', pos);
+    if (eol == std::string::npos || eol > header_end) eol = header_end;
+    std::istringstream line(text.substr(pos, eol - pos));
+    pos = eol + 1;
+    std::string word;
+    line >> word;
+    if (word == "format") {
+      line >> word;
+      ascii = word == "ascii";
+    } else if (word == "element") {
+      Element e;
+      line >> e.name >> e.count;
+      elements.push_back(e);
+    } else if (word == "property" && !elements.empty()) {
+      line >> word;
+      elements.back().lists.push_back(word == "list");
+    }
+  }
+  if (!ascii) return;
+  const char* p = text.data() + text.find('\n', header_end) + 1;
+  const char* end = text.data() + text.size();
+  if (text.find('\n', header_end) == std::string::npos) p = end;
+  // The next token, or false at the end of the file.
+  const auto next = [&](std::string_view& token) {
+    while (p < end && std::isspace(static_cast<unsigned char>(*p))) ++p;
+    const char* t = p;
+    while (p < end && !std::isspace(static_cast<unsigned char>(*p))) ++p;
+    token = std::string_view(t, static_cast<size_t>(p - t));
+    return p > t;
+  };
+  for (const Element& e : elements)
+    for (long long i = 0; i < e.count; ++i)
+      for (const bool list : e.lists) {
+        std::string_view token;
+        long long n = 1;
+        bool ok = next(token);
+        if (ok && list) {
+          const auto [ptr, ec] = std::from_chars(token.data(), token.data() + token.size(), n);
+          ok = ec == std::errc() && ptr == token.data() + token.size() && n >= 0;
+        }
+        for (long long k = 0; ok && k < (list ? n : 0); ++k) ok = next(token);
+        if (!ok)
+          throw InputError(name, "cut short: it ends inside " + e.name + " " + std::to_string(i) + " of the " + std::to_string(e.count) +
+                                     " its header announces");
+      }
+}
+
 // One input mesh instanced by one node, with the node's accumulated transform.
 struct Instance {
   const aiMesh* mesh;
@@ -175,7 +246,8 @@ Mesh read_mesh(const fs::path& path, MeshReadReport* report) {
   const std::string name = path.string();
   if (!fs::exists(path)) throw InputError(name, "no such file");
   if (fs::is_directory(path)) throw InputError(name, "is a folder, not a mesh file");
-  if (lower_ext(path) == ".obj") check_obj_texcoords(path, name);
+  if (lower_ext(path) == ".obj") check_obj_texcoords(file_text(path, name), name);
+  if (lower_ext(path) == ".ply") check_ascii_ply(file_text(path, name), name);
   Assimp::Importer importer;
   // Coordinates are the file's own: a COLLADA up_axis is not turned into a rotation, so a
   // .dae base mesh and an .obj high mesh of one asset stay aligned.

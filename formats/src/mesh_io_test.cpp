@@ -229,6 +229,24 @@ TEST(MeshIo, ObjTextureCoordinatesAreCheckedNotRepaired) {
   EXPECT_TRUE(saw_third) << "the forward-referenced vt 3 is (1, 1)";
 }
 
+// An ASCII PLY with fewer faces than its header announces: assimp made up the missing face.
+TEST(MeshIo, AsciiPlyShortOfItsHeaderIsRefused) {
+  test::TempDir dir;
+  const std::string header = "ply\nformat ascii 1.0\ncomment made by hand\nelement vertex 4\nproperty float x\nproperty float y\n"
+                             "property float z\nelement face 3\nproperty list uchar int vertex_indices\nend_header\n";
+  test::write_text(dir / "few.ply", header + "0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n");
+  try {
+    read_mesh(dir / "few.ply");
+    ADD_FAILURE() << "a PLY short of a face must be refused";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("few.ply: cut short: it ends inside face 2 of the 3 its header announces"), std::string::npos)
+        << e.what();
+  }
+  // All three, one a quad (two triangles).
+  test::write_text(dir / "ok.ply", header + "0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n4 0 1 2 3\n");
+  EXPECT_EQ(read_mesh(dir / "ok.ply").n_faces(), 4u);
+}
+
 TEST(MeshIo, NanCoordinateIsAnInputError) {
   test::TempDir dir;
   test::write_text(dir / "nan.obj", "v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n");
