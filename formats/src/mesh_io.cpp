@@ -4,7 +4,9 @@
 #include "meso/core/mesh_arrays.hpp"
 
 #include <OpenMesh/Core/IO/MeshIO.hh>
+#include <assimp/DefaultLogger.hpp>
 #include <assimp/Importer.hpp>
+#include <assimp/LogStream.hpp>
 #include <assimp/config.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -17,6 +19,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <mutex>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -223,6 +226,65 @@ void check_ascii_ply(const std::string& text, const std::string& name) {
       }
 }
 
+// Some of assimp's readers repair a file without failing: they drop faces whose indices are
+// out of range (glTF) or point them elsewhere (OFF), and only say so in their log. A file
+// meso would read differently from what it says is refused, so assimp's log is collected
+// while it reads: an error, or a warning that reports dropped or out-of-range data, ends the
+// read. The logger is process-wide: reads are serialised by a mutex.
+class AssimpLog {
+ public:
+  AssimpLog() : lock_(mutex()) {
+    Assimp::DefaultLogger::create("", Assimp::Logger::NORMAL, 0);  // no file, no console
+    Assimp::DefaultLogger::get()->attachStream(new Stream(entries_), Assimp::Logger::Warn | Assimp::Logger::Err);
+  }
+  ~AssimpLog() { Assimp::DefaultLogger::kill(); }
+  AssimpLog(const AssimpLog&) = delete;
+  AssimpLog& operator=(const AssimpLog&) = delete;
+
+  // The first error logged, or "" (a failed read's own message is often a later symptom).
+  std::string first_error() const {
+    for (const Entry& e : entries_)
+      if (e.error) return e.text;
+    return {};
+  }
+  // The first error, or warning of data dropped or out of range, or "".
+  std::string first_repair() const {
+    for (const Entry& e : entries_) {
+      std::string lower = e.text;
+      std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+      if (e.error || lower.find("dropped") != std::string::npos || lower.find("out of range") != std::string::npos ||
+          lower.find("out-of-range") != std::string::npos)
+        return e.text;
+    }
+    return {};
+  }
+
+ private:
+  struct Entry {
+    bool error;
+    std::string text;
+  };
+  struct Stream : Assimp::LogStream {
+    explicit Stream(std::vector<Entry>& out) : out_(out) {}
+    // Messages arrive as "Warn,  T0: text\n" or "Error, T0: text\n".
+    void write(const char* message) override {
+      std::string m(message);
+      const bool error = m.rfind("Error", 0) == 0;
+      const size_t colon = m.find(": ");
+      if (colon != std::string::npos) m.erase(0, colon + 2);
+      m = m.substr(0, m.find('\n'));
+      out_.push_back({error, m});
+    }
+    std::vector<Entry>& out_;
+  };
+  static std::mutex& mutex() {
+    static std::mutex m;
+    return m;
+  }
+  std::lock_guard<std::mutex> lock_;
+  std::vector<Entry> entries_;
+};
+
 // One input mesh instanced by one node, with the node's accumulated transform.
 struct Instance {
   const aiMesh* mesh;
@@ -255,17 +317,24 @@ Mesh read_mesh(const fs::path& path, MeshReadReport* report) {
   // Triangulate polygons in place; keep everything else as the file has it (no welding by
   // assimp, which would also merge corners we want to keep, no reordering).
   const aiScene* scene = nullptr;
-  std::string err;
-  try {
-    scene = importer.ReadFile(name, aiProcess_Triangulate | aiProcess_ValidateDataStructure);
-  } catch (const std::exception& e) {  // aiAssertViolation's, if assimp lets it through
-    err = e.what();
+  std::string err, logged_error, repair;
+  {
+    const AssimpLog log;
+    try {
+      scene = importer.ReadFile(name, aiProcess_Triangulate | aiProcess_ValidateDataStructure);
+    } catch (const std::exception& e) {  // aiAssertViolation's, if assimp lets it through
+      err = e.what();
+    }
+    logged_error = log.first_error();
+    repair = log.first_repair();
   }
   if (!scene || !scene->mRootNode) {
+    if (err.empty()) err = logged_error;
     if (err.empty()) err = importer.GetErrorString();
     err = err.substr(0, err.find('\n'));
     throw InputError(name, "cannot read mesh: " + (err.empty() ? std::string("unknown format") : err));
   }
+  if (!repair.empty()) throw InputError(name, "damaged, not read (assimp: " + repair + ")");
   std::vector<Instance> instances;
   collect(scene, scene->mRootNode, aiMatrix4x4(), instances);
 

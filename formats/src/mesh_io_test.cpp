@@ -247,6 +247,44 @@ TEST(MeshIo, AsciiPlyShortOfItsHeaderIsRefused) {
   EXPECT_EQ(read_mesh(dir / "ok.ply").n_faces(), 4u);
 }
 
+// Files assimp reads by repairing them, saying so only in its log: a glTF face indexing past
+// the vertices (dropped) and an OFF face doing so (pointed elsewhere) are refused; an OFF with
+// fewer faces than its header says is named as such.
+TEST(MeshIo, FilesAssimpWouldRepairAreRefused) {
+  test::TempDir dir;
+  // Two triangles over four vertices, the second's last index 9: (0 1 2) (0 2 9).
+  test::write_text(dir / "oor.gltf",
+                   R"({"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],)"
+                   R"( "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}], "buffers": [{"byteLength": 72,)"
+                   R"( "uri": "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAACAPwAAgD8AAAAAAAAAAAAAgD8AAAAA)"
+                   R"(AAAAAAEAAAACAAAAAAAAAAIAAAAJAAAA"}], "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48},)"
+                   R"( {"buffer": 0, "byteOffset": 48, "byteLength": 24}], "accessors": [{"bufferView": 0, "componentType": 5126,)"
+                   R"( "count": 4, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}, {"bufferView": 1, "componentType": 5125,)"
+                   R"( "count": 6, "type": "SCALAR"}]})");
+  test::write_text(dir / "oor.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 7\n");
+  test::write_text(dir / "few.off", "OFF\n4 3 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n");
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"oor.gltf", "oor.gltf: damaged, not read (assimp: Some faces had out-of-range indices"},
+      {"oor.off", "oor.off: damaged, not read (assimp: OFF: Vertex index is out of range)"},
+      {"few.off", "few.off: cannot read mesh: OFF: The number of faces in the header is incorrect"},
+  };
+  for (const auto& [file, message] : cases) {
+    try {
+      read_mesh(dir / file);
+      ADD_FAILURE() << file << " must be refused";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+    }
+  }
+  // The same glTF with the index in range (9 -> 3, the byte before the closing "AAAA") reads.
+  std::string good = test::read_text(dir / "oor.gltf");
+  const size_t at = good.find("AAAAJAAAA");
+  ASSERT_NE(at, std::string::npos);
+  good.replace(at, 9, "AAAADAAAA");
+  test::write_text(dir / "ok.gltf", good);
+  EXPECT_EQ(read_mesh(dir / "ok.gltf").n_faces(), 2u);
+}
+
 TEST(MeshIo, NanCoordinateIsAnInputError) {
   test::TempDir dir;
   test::write_text(dir / "nan.obj", "v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n");
