@@ -5,11 +5,18 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 namespace meso {
 
 std::vector<ErrorRegion> error_regions(const Mesh& b, const std::vector<double>& face_distance, double threshold) {
+  // Distances below the float resolution of b's coordinates are rounding (an unreduced mesh
+  // measures about 1e-16 from itself), not departures: `--error 0` must not report them.
+  float largest = 0;
+  for (auto v : b.vertices())
+    for (int k = 0; k < 3; ++k) largest = std::max(largest, std::abs(b.point(v)[k]));
+  threshold = std::max(threshold, static_cast<double>(std::numeric_limits<float>::epsilon()) * largest);
   std::vector<ErrorRegion> regions;
   std::vector<int> region_of(b.n_faces(), -1);
   std::vector<int> stack;

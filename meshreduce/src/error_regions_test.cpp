@@ -49,5 +49,18 @@ TEST(ErrorRegions, ASpikeIsTheOneRegion) {
   EXPECT_EQ(face_distances(high, flat, o), d) << "deterministic";
 }
 
+// A mesh measured against itself is about 1e-16 away (rounding in the measure): at a
+// threshold of 0 that is no region, while a real departure of 1e-5 still is one.
+TEST(ErrorRegions, RoundingIsNoDeparture) {
+  const Mesh grid = test::make_grid(8, 8);
+  std::vector<double> d(grid.n_faces(), 3e-16);
+  EXPECT_TRUE(error_regions(grid, d, 0.0).empty());
+  d[5] = 1e-5;
+  const std::vector<ErrorRegion> r = error_regions(grid, d, 0.0);
+  ASSERT_EQ(r.size(), 1u);
+  EXPECT_EQ(r[0].faces, 1u);
+  EXPECT_EQ(r[0].first_face, 5);
+}
+
 }  // namespace
 }  // namespace meso

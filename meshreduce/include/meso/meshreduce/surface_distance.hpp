@@ -78,7 +78,9 @@ class SurfaceDistanceReference {
 std::vector<double> face_distances(const Mesh& a, const Mesh& b, const SurfaceDistanceOptions& options = {});
 
 // Where b departs from a by more than `threshold` (object units): the faces of b whose
-// face_distances exceed it, grouped into edge-connected regions, largest maximum first.
+// face_distances exceed it, grouped into edge-connected regions, largest maximum first. A
+// threshold below the float resolution of b's coordinates (FLT_EPSILON times the largest
+// |coordinate|) counts as that resolution: smaller distances are rounding.
 struct ErrorRegion {
   size_t faces = 0;
   double max_distance = 0;  // largest face distance in the region, object units
