@@ -188,6 +188,16 @@ TEST(Cli, BadUsageExitsTwo) {
   EXPECT_EQ(run("streams sdf h.exr -o s.exr --relief inf").code, 2);
   EXPECT_EQ(run("streams cone h.exr -o c.exr --tolerance nan").code, 2);
   EXPECT_EQ(run("streams cone h.exr -o c.png").code, 2) << "streams are EXR: refused before any work";
+  // An option's own check speaks in one line of meso's form, naming the option and the value
+  // (CLI11's PositiveNumber printed DBL_MAX's 309 digits, then a second line).
+  for (const std::string& args : {std::string("meshreduce in.obj -o out.obj --faces -5"), std::string("--threads -1 meshreduce in.obj -o o.obj --faces 5"),
+                                  std::string("preview base.obj --maps d --headless --png p.png --zoom 0")}) {
+    const Result r = run(args);
+    EXPECT_EQ(r.code, 2) << args;
+    EXPECT_EQ(lines(r.err), 1u) << r.err;
+    EXPECT_EQ(r.err.rfind("meso: error: --", 0), 0u) << r.err;
+    EXPECT_LT(r.err.size(), 120u) << r.err;
+  }
 }
 
 TEST(Cli, BadInputExitsThreeWithOneLineNamingTheFileAndNoOutput) {

@@ -49,6 +49,9 @@ void warn(Globals& g, const std::string& message);
 
 // A validator for floating-point options: refuses NaN and infinities.
 extern const CLI::Validator Finite;
+// Finite and above 0; finite and 0 or more.
+extern const CLI::Validator Positive;
+extern const CLI::Validator NonNegative;
 
 // "512" or "512x256" -> width, height. Throws UsageError.
 void parse_size(const std::string& text, int& width, int& height);

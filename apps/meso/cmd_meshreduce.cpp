@@ -113,7 +113,7 @@ void add_meshreduce(CLI::App& app, Context& ctx) {
   CLI::App* sub = app.add_subcommand("meshreduce", "Reduce a high-poly mesh to a base mesh (quadric edge collapse with optimal placement)");
   auto* input_opt = sub->add_option("input", args->input, "Input mesh (OBJ, FBX, glTF, PLY, OFF, DAE, ...); not with --from-progressive");
   sub->add_option("-o,--output", args->output, "Output mesh (.obj, .ply, .gltf, .glb)")->required();
-  auto* faces = sub->add_option("--faces", args->faces, "Target face count")->check(CLI::PositiveNumber);
+  auto* faces = sub->add_option("--faces", args->faces, "Target face count")->check(Positive);
   auto* ratio = sub->add_option("--ratio", args->ratio, "Target as a fraction of the input's faces")
                     ->check(CLI::Range(0.0, 1.0) & Finite);
   auto* error = sub->add_option("--error", args->error,
@@ -129,7 +129,7 @@ void add_meshreduce(CLI::App& app, Context& ctx) {
   sub->add_option("--max-aspect-ratio", args->max_aspect_ratio,
                   "Refuse collapses that create a triangle with a larger aspect ratio (longest edge^2 * sqrt(3) / (4 area): "
                   "1 = equilateral) unless the faces replaced had one; 0: off")
-      ->check(CLI::NonNegativeNumber & Finite)
+      ->check(NonNegative)
       ->capture_default_str();
   auto* lock_boundary =
       sub->add_flag("--lock-boundary", args->lock_boundary, "Boundary vertices never move and are never removed (boundary edges never collapse)");

@@ -102,7 +102,7 @@ void add_preview(CLI::App& app, Context& ctx) {
                   "Degrees between the view direction and the mesh's mean normal (0 to 89.9)")
       ->check(CLI::Range(0.0, 89.9) & Finite);
   sub->add_option("--azimuth", args->options.camera.azimuth, "Degrees around the mean normal")->check(Finite);
-  sub->add_option("--zoom", args->options.camera.zoom, "Zoom factor (> 1 moves closer)")->check(CLI::PositiveNumber & Finite);
+  sub->add_option("--zoom", args->options.camera.zoom, "Zoom factor (> 1 moves closer)")->check(Positive);
   sub->add_option("--pan", args->pan, "X,Y: move the view right and up by X and Y framing radii (half the mesh's box diagonal)")
       ->expected(2)
       ->delimiter(',')
@@ -128,7 +128,7 @@ void add_preview(CLI::App& app, Context& ctx) {
   sub->add_option("--lod-distance", args->options.lod_distance,
                   "dstream: vertices nearer than this (object units) take the level drawn (the finest within --iterations segments per "
                   "edge), farther than twice this the coarser level's surface, morphing between (0: no morph)")
-      ->check(CLI::NonNegativeNumber & Finite);
+      ->check(NonNegative);
   sub->add_option("--binary-steps", args->options.binary_steps, "relief: halvings of the step that crossed the surface (default 8)")
       ->check(CLI::Range(0, 64));
   sub->add_option("--bisection-steps", args->options.bisection_steps,
@@ -140,11 +140,11 @@ void add_preview(CLI::App& app, Context& ctx) {
   sub->add_option("--dig-fallback", args->options.dig_fallback_texels,
                   "dig: a block whose corner rays are more than this many texels apart across the ray's path searches the "
                   "whole slab (default 8; 0: never)")
-      ->check(CLI::NonNegativeNumber & Finite);
+      ->check(NonNegative);
   sub->add_option("--tess-displacement", args->options.tess_displacement,
                   "tessellation: cut an edge per texel where the displacement along it departs from linear by more than this "
                   "fraction of the height range (default 0.02)")
-      ->check(CLI::NonNegativeNumber & Finite);
+      ->check(NonNegative);
   sub->add_option("--tess-normal-angle", args->options.tess_normal_angle,
                   "tessellation: at least one segment per this many degrees between an edge's end normals (default 5)")
       ->check(CLI::Range(0.01, 360.0) & Finite);
@@ -165,10 +165,10 @@ void add_preview(CLI::App& app, Context& ctx) {
       ->check(CLI::Range(1, 1000));
   sub->add_option("--uv-tolerance", args->uv_tolerance,
                   "With --compare: texels between a method's visible point and the reference's beyond which a pixel is a wrong hit")
-      ->check(CLI::PositiveNumber & Finite);
+      ->check(Positive);
   sub->add_option("--reference-edge", args->reference_edge,
                   "With --compare: longest UV edge of the reference's sub-triangles (over curved parts of the base; flat parts are intersected exactly), in texels")
-      ->check(CLI::PositiveNumber & Finite);
+      ->check(Positive);
   sub->add_option("--reference-triangles", args->reference_triangles,
                   "With --compare: cap on the reference's triangle and exact-cell count (coarser sub-triangles beyond it)")
       ->check(CLI::Range(size_t(1), size_t(1) << 30));

@@ -203,8 +203,8 @@ void add_streams(CLI::App& app, Context& ctx) {
   vdm_cmd->add_option("--curvatures", vdm->curvatures, "Comma-separated curvatures along the view direction, per unit of u, increasing (default: 0, a flat base; with --mesh: from the mesh)");
   vdm_cmd->add_option("--mesh", vdm->mesh, "Base mesh: relief from its size (unless --relief) and curvature slices from quadric fits (unless --curvatures)");
   vdm_cmd->add_option("--curvature-steps", vdm->curvature_steps, "With --mesh: curvature samples over the mesh's range (5th percentile of k2 to 95th of k1; 1: the median mean curvature)")->check(CLI::Range(1, 64))->capture_default_str();
-  vdm_cmd->add_option("--relief", vdm->options.relief, "Height range in units of u (default 0.1, or from --mesh)")->check(CLI::PositiveNumber & Finite);
-  vdm_cmd->add_option("--max-error", vdm->max_error, "Largest RMS error of the compressed table, units of u")->check(CLI::NonNegativeNumber & Finite)->capture_default_str();
+  vdm_cmd->add_option("--relief", vdm->options.relief, "Height range in units of u (default 0.1, or from --mesh)")->check(Positive);
+  vdm_cmd->add_option("--max-error", vdm->max_error, "Largest RMS error of the compressed table, units of u")->check(NonNegative)->capture_default_str();
   vdm_cmd->add_option("--max-rank", vdm->max_rank, "Largest number of PCA components")->check(CLI::Range(0, 4096))->capture_default_str();
   vdm_cmd->callback([&ctx, vdm_args, vdm, vdm_cmd] {
     vdm->relief_given = vdm_cmd->count("--relief") > 0;
@@ -288,8 +288,8 @@ void add_streams(CLI::App& app, Context& ctx) {
   dstream->add_option("--high", ds->high, "High-poly mesh")->required();
   dstream->add_option("-o,--output", ds->output, "Output file (dstream.bin, docs/formats.md)")->required();
   dstream->add_option("--levels", ds->options.levels, "Levels 0..L-1, level l with 2^l segments per edge")->check(CLI::Range(1, 7))->capture_default_str();
-  dstream->add_option("--front", ds->front, "Ray reach outward, object units (0: 5% of the high mesh's diagonal)")->check(CLI::NonNegativeNumber & Finite);
-  dstream->add_option("--back", ds->back, "Ray reach inward, object units (0: as --front)")->check(CLI::NonNegativeNumber & Finite);
+  dstream->add_option("--front", ds->front, "Ray reach outward, object units (0: 5% of the high mesh's diagonal)")->check(NonNegative);
+  dstream->add_option("--back", ds->back, "Ray reach inward, object units (0: as --front)")->check(NonNegative);
   dstream->callback([&ctx, ds] {
     ctx.run = [&ctx, ds](nlohmann::json& report, Progress& progress) {
       nlohmann::json low_report, high_report;
@@ -338,7 +338,7 @@ void add_streams(CLI::App& app, Context& ctx) {
                                         "Output EXR: W x (H * depth), slices stacked, slice 0 lowest", *sdf_args);
   sdf->add_option("--depth", sdf_options->depth, "Slices along the height axis")->check(CLI::Range(1, 1024));
   sdf->add_option("--relief", sdf_options->relief, "Height range in units of the map's width (the box is 1 x H/W x relief)")
-      ->check(CLI::PositiveNumber & Finite);
+      ->check(Positive);
   sdf->callback([&ctx, sdf_args, sdf_options] {
     ctx.run = [&ctx, sdf_args, sdf_options](nlohmann::json& report, Progress& progress) {
       const HeightField field = load_height_field(*sdf_args);

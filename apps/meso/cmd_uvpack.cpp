@@ -75,7 +75,7 @@ void add_uvpack(CLI::App& app, Context& ctx) {
   check->add_option("input", args->input, "Mesh with UVs")->required();
   check->add_option("--size", args->size, "Texture size in texels per side")->check(CLI::Range(1, 32768));
   check->add_option("--padding", args->padding, "Texels charts must keep between them (0: not checked)")
-      ->check(CLI::NonNegativeNumber & Finite);
+      ->check(NonNegative);
   check->add_option("--mip-safe", args->mip_safe,
                     "Also check that no texel of MIP levels 0..K that a chart's bilinear lookups read holds another chart's values "
                     "(after the bake's dilation; box-filtered levels; --size a multiple of 2^K)")
@@ -204,7 +204,7 @@ void add_uvpack(CLI::App& app, Context& ctx) {
       ->check(CLI::Range(1.0, 179.0) & Finite)
       ->capture_default_str();
   pack->add_option("--max-chart-faces", pack_args->unwrap_options.max_chart_faces, "Faces per chart at most (0: no cap)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(NonNegative)
       ->capture_default_str();
   pack->callback([&ctx, pack_args] {
     ctx.run = [&ctx, pack_args](nlohmann::json& report, Progress&) {

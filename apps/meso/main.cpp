@@ -41,6 +41,26 @@ const CLI::Validator Finite(
     },
     "FINITE");
 
+// CLI11's PositiveNumber and NonNegativeNumber are ranges up to DBL_MAX, and say so in full
+// (a 309-digit bound) when they refuse a value.
+namespace {
+CLI::Validator sign_check(bool zero_allowed, const char* what, const char* name) {
+  return CLI::Validator(
+      [=](std::string& text) -> std::string {
+        try {
+          size_t used = 0;
+          const double v = std::stod(text, &used);
+          if (used == text.size() && std::isfinite(v) && (v > 0 || (zero_allowed && v == 0))) return {};
+        } catch (const std::exception&) {
+        }
+        return "'" + text + "' is not " + what;
+      },
+      name);
+}
+}  // namespace
+const CLI::Validator Positive = sign_check(false, "a finite number above 0", "POSITIVE");
+const CLI::Validator NonNegative = sign_check(true, "a finite number of 0 or more", "NONNEGATIVE");
+
 std::string lower_extension(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
@@ -96,9 +116,11 @@ int main(int argc, char** argv) {
   // Global options may also follow the subcommand (meso bake ... --json); subcommands added
   // below inherit this.
   app.fallthrough();
+  // A usage error is one line, in meso's own form (CLI11's default adds a second).
+  app.failure_message([](const CLI::App*, const CLI::Error& e) { return std::string("meso: error: ") + e.what() + " (see --help)\n"; });
   app.option_defaults()->always_capture_default();  // --help shows every default
   app.add_option("--threads", globals.threads, "Worker threads (0 = all cores); outputs do not depend on it")
-      ->check(CLI::NonNegativeNumber);
+      ->check(cli::NonNegative);
   app.add_flag("--quiet", globals.quiet, "No progress bar, information or warnings (errors still print)");
   app.add_flag("--json", globals.json, "Print a machine-readable JSON report of what was done on stdout");
   cli::add_meshreduce(app, ctx);
