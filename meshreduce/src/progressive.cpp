@@ -300,7 +300,10 @@ ProgressiveMesh read_progressive(const std::filesystem::path& path) {
   }
   pm.uvs.resize(nu);
   for (auto& uv : pm.uvs) read_uv(uv);
-  if (final_faces > nf || nc > nf) throw InputError(name, "corrupt header (face counts)");
+  // Each collapse removes one face (a boundary edge) or two: the last level's face count is
+  // bounded by the collapse count before any replay (a replay checks it exactly at the end).
+  if (final_faces > nf || nc > nf || final_faces + nc > nf || final_faces + 2 * nc < nf)
+    throw InputError(name, "corrupt header (face counts)");
   pm.final_faces = final_faces;
   return pm;
 }

@@ -230,6 +230,14 @@ TEST(Progressive, DamagedFilesAreInputErrors) {
   version[8] = 2;
   expect_input_error(version, "version 2");
   EXPECT_THROW(read_progressive(dir / "missing.pm"), InputError);
+  // A header whose last-level face count the collapses cannot reach (each removes one face
+  // or two), written with a valid checksum: refused on reading, before any replay.
+  for (const size_t final_faces : {pm.input_faces() - pm.collapses.size() + 1, pm.input_faces() - 2 * pm.collapses.size() - 1}) {
+    ProgressiveMesh off = pm;
+    off.final_faces = final_faces;
+    write_progressive(off, dir / "off.pm");
+    expect_input_error(test::read_text(dir / "off.pm"), "corrupt header (face counts)");
+  }
 
   // A record that reads but does not replay (an illegal collapse) is an InputError too.
   ProgressiveMesh wrong = pm;
