@@ -217,11 +217,15 @@ TEST(Cli, BadInputExitsThreeWithOneLineNamingTheFileAndNoOutput) {
   write_image(wide, dir / "wide.exr", PixelFormat::float32);
   // Cut short: a float TIFF (libtiff reports the short strip, yet OIIO's read succeeded with
   // zeros), a PNG's pixels and a PNG's header (libpng printed its own lines besides meso's).
+  // A PNG damaged inside its data, not under ASan (OIIO 2.4 leaks on libpng's error path).
   Image waves(64, 64, 1);
   for (size_t i = 0; i < waves.pixels.size(); ++i) waves.pixels[i] = 0.5f + 0.5f * std::sin(0.37f * float(i % 64) + 0.11f * float(i / 64));
   write_image(waves, dir / "cut.tif", PixelFormat::float32);
   write_image(waves, dir / "cut.png", PixelFormat::uint16);
   fs::copy_file(dir / "cut.png", dir / "head.png");
+  std::string damaged = test::read_text(dir / "cut.png");
+  damaged[damaged.find("IDAT") + 200] ^= 0x55;
+  test::write_text(dir / "damaged.png", damaged);
   fs::resize_file(dir / "cut.tif", fs::file_size(dir / "cut.tif") / 2);
   fs::resize_file(dir / "cut.png", fs::file_size(dir / "cut.png") / 2);
   fs::resize_file(dir / "head.png", 30);
@@ -249,8 +253,11 @@ TEST(Cli, BadInputExitsThreeWithOneLineNamingTheFileAndNoOutput) {
       {"streams sdf " + (dir / "wide.exr").string() + " -o " + (dir / "o.exr").string(), "wide.exr"},
       {"uvpack check " + (dir / "nanuv.obj").string() + " --size 16 -o " + (dir / "o.png").string(), "nanuv.obj: line 5"},
       {"streams cone " + (dir / "cut.tif").string() + " -o " + (dir / "o.exr").string(), "cut.tif: cannot read image data"},
-      {"streams cone " + (dir / "cut.png").string() + " -o " + (dir / "o.exr").string(), "cut.png: cannot read image data"},
-      {"streams cone " + (dir / "head.png").string() + " -o " + (dir / "o.exr").string(), "head.png: cannot read image"},
+      {"streams cone " + (dir / "cut.png").string() + " -o " + (dir / "o.exr").string(), "cut.png: cut short: its IDAT chunk"},
+      {"streams cone " + (dir / "head.png").string() + " -o " + (dir / "o.exr").string(), "head.png: cut short: its IHDR chunk"},
+#if !defined(__SANITIZE_ADDRESS__)
+      {"streams cone " + (dir / "damaged.png").string() + " -o " + (dir / "o.exr").string(), "damaged.png: cannot read image data"},
+#endif
       {"meshreduce --from-progressive " + dir.path().string() + " --faces 10 -o " + out, "is a folder"},
   };
   for (const auto& c : cases) {
