@@ -106,11 +106,12 @@ std::string file_text(const fs::path& path, const std::string& name) {
 // and when a face names a texture coordinate the file does not have it drops every UV of the
 // file, without a word either time: a bake would then read a wrong or missing mapping. So an
 // OBJ's `vt` values and the texture indices of its `f` lines are checked first, naming the
-// line (one pass over the file, about 1.5 s per GB).
-void check_obj_texcoords(const std::string& text, const std::string& name) {
+// line (one pass over the file, about 1.5 s per GB). Returns the triangles of faces without
+// texture indices when the file has some `vt` (assimp gives their corners UV 0,0 silently).
+size_t check_obj_texcoords(const std::string& text, const std::string& name) {
   const auto blank = [](char c) { return c == ' ' || c == '\t' || c == '\r'; };
   long long texcoords = 0, largest = 0;
-  size_t line = 0, largest_line = 0;
+  size_t line = 0, largest_line = 0, untextured = 0;
   std::string largest_token;
   for (const char *p = text.data(), *end = p + text.size(); p < end;) {
     const char* eol = static_cast<const char*>(std::memchr(p, '\n', static_cast<size_t>(end - p)));
@@ -125,7 +126,8 @@ void check_obj_texcoords(const std::string& text, const std::string& name) {
     const char* stop = static_cast<const char*>(std::memchr(q, '#', static_cast<size_t>(eol - q)));
     if (!stop) stop = eol;
     q += vt ? 2 : 1;
-    const std::string where = "line " + std::to_string(line);
+    const auto where = [&] { return "line " + std::to_string(line); };
+    size_t corners = 0, textured = 0;
     while (q < stop) {
       while (q < stop && blank(*q)) ++q;
       const char* t = q;
@@ -137,10 +139,11 @@ void check_obj_texcoords(const std::string& text, const std::string& name) {
         double value = 0;
         const auto [ptr, ec] = std::from_chars(a, q, value);
         if (ec != std::errc() || ptr != q || !std::isfinite(value))
-          throw InputError(name, where + ": texture coordinate '" + std::string(token) + "' is not a finite number");
+          throw InputError(name, where() + ": texture coordinate '" + std::string(token) + "' is not a finite number");
         continue;
       }
       // v, v/vt, v/vt/vn or v//vn: only the vt index is checked here (assimp checks v's).
+      ++corners;
       const size_t slash = token.find('/');
       if (slash == std::string_view::npos || slash + 1 >= token.size() || token[slash + 1] == '/') continue;
       const char* a = t + slash + 1;
@@ -151,16 +154,19 @@ void check_obj_texcoords(const std::string& text, const std::string& name) {
       // largest is checked at the end.
       const bool parsed = ec == std::errc() && (ptr == q || *ptr == '/');
       if (!parsed || index == 0 || (index < 0 && texcoords + index < 0))
-        throw InputError(name, where + ": face corner '" + std::string(token) + "' names texture coordinate " +
+        throw InputError(name, where() + ": face corner '" + std::string(token) + "' names texture coordinate " +
                                    std::string(a, ptr == a ? q : ptr) + ", but the file has " + std::to_string(texcoords) +
                                    " before it");
       if (index > largest) largest = index, largest_line = line, largest_token = token;
+      ++textured;
     }
     if (vt) ++texcoords;
+    if (f && textured == 0 && corners >= 3) untextured += corners - 2;  // assimp fans a polygon into n - 2 triangles
   }
   if (largest > texcoords)
     throw InputError(name, "line " + std::to_string(largest_line) + ": face corner '" + largest_token + "' names texture coordinate " +
                                std::to_string(largest) + ", but the file has " + std::to_string(texcoords));
+  return texcoords > 0 ? untextured : 0;
 }
 
 // assimp's ASCII PLY reader, given fewer elements than the header announces, makes up the
@@ -308,7 +314,7 @@ Mesh read_mesh(const fs::path& path, MeshReadReport* report) {
   const std::string name = path.string();
   if (!fs::exists(path)) throw InputError(name, "no such file");
   if (fs::is_directory(path)) throw InputError(name, "is a folder, not a mesh file");
-  if (lower_ext(path) == ".obj") check_obj_texcoords(file_text(path, name), name);
+  const size_t obj_untextured = lower_ext(path) == ".obj" ? check_obj_texcoords(file_text(path, name), name) : 0;
   if (lower_ext(path) == ".ply") check_ascii_ply(file_text(path, name), name);
   Assimp::Importer importer;
   // Coordinates are the file's own: a COLLADA up_axis is not turned into a rotation, so a
@@ -417,6 +423,9 @@ Mesh read_mesh(const fs::path& path, MeshReadReport* report) {
     }
   }
   if (mesh.n_faces() == 0) throw InputError(name, "contains no triangles");
+  // An OBJ's faces without `vt` inside a textured object are counted only by the scan (assimp
+  // gives them UV 0,0); it also counts those of untextured objects, which the loop above saw.
+  if (any_uv) rep.faces_without_uv = std::max(rep.faces_without_uv, obj_untextured);
   if (any_uv) {
     // Boundary halfedges belong to no face and so got no UV above; OpenMesh leaves them
     // uninitialised. Zero them so nothing downstream reads indeterminate values.

@@ -227,6 +227,11 @@ TEST(MeshIo, ObjTextureCoordinatesAreCheckedNotRepaired) {
   for (auto h : m.halfedges())
     if (!m.is_boundary(h) && m.texcoord2D(h) == Vec2f(1, 1)) saw_third = true;
   EXPECT_TRUE(saw_third) << "the forward-referenced vt 3 is (1, 1)";
+  // Faces without vt in a textured file: read, and counted (a quad is two triangles).
+  test::write_text(dir / "mixed.obj", quad + "vt 0 0\nvt 1 0\nvt 1 1\nf 1/1 2/2 3/3\nf 1 3 4\nf 1 2 3 4\n");
+  MeshReadReport report;
+  EXPECT_EQ(read_mesh(dir / "mixed.obj", &report).n_faces(), 4u);
+  EXPECT_EQ(report.faces_without_uv, 3u);
 }
 
 // An ASCII PLY with fewer faces than its header announces: assimp made up the missing face.
