@@ -204,9 +204,9 @@ void check_ascii_ply(const std::string& text, const std::string& name) {
     }
   }
   if (!ascii) return;
-  const char* p = text.data() + text.find('\n', header_end) + 1;
+  const size_t body = text.find('\n', header_end);
   const char* end = text.data() + text.size();
-  if (text.find('\n', header_end) == std::string::npos) p = end;
+  const char* p = body == std::string::npos ? end : text.data() + body + 1;
   // The next token, or false at the end of the file.
   const auto next = [&](std::string_view& token) {
     while (p < end && std::isspace(static_cast<unsigned char>(*p))) ++p;
@@ -216,7 +216,7 @@ void check_ascii_ply(const std::string& text, const std::string& name) {
     return p > t;
   };
   for (const Element& e : elements)
-    for (long long i = 0; i < e.count; ++i)
+    for (long long i = 0; i < e.count && !e.lists.empty(); ++i)  // an element without properties takes no tokens
       for (const bool list : e.lists) {
         std::string_view token;
         long long n = 1;

@@ -250,6 +250,12 @@ TEST(MeshIo, AsciiPlyShortOfItsHeaderIsRefused) {
   // All three, one a quad (two triangles).
   test::write_text(dir / "ok.ply", header + "0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n4 0 1 2 3\n");
   EXPECT_EQ(read_mesh(dir / "ok.ply").n_faces(), 4u);
+  // An element without properties takes no tokens, however many it announces (the walk
+  // must not count to 10^15).
+  std::string junk = header;
+  junk.insert(junk.find("element face"), "element junk 999999999999999\n");
+  test::write_text(dir / "junk.ply", junk + "0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n3 0 1 3\n");
+  EXPECT_EQ(read_mesh(dir / "junk.ply").n_faces(), 3u);
 }
 
 // Files assimp reads by repairing them, saying so only in its log: a glTF face indexing past
