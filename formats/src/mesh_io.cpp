@@ -235,8 +235,9 @@ void check_ascii_ply(const std::string& text, const std::string& name) {
 // Some of assimp's readers repair a file without failing: they drop faces whose indices are
 // out of range (glTF) or point them elsewhere (OFF), and only say so in their log. A file
 // meso would read differently from what it says is refused, so assimp's log is collected
-// while it reads: an error, or a warning that reports dropped or out-of-range data, ends the
-// read. The logger is process-wide: reads are serialised by a mutex.
+// while it reads: a message that reports dropped or out-of-range data ends the read (other
+// messages, such as a material's missing texture image, do not). The logger is
+// process-wide: reads are serialised by a mutex.
 class AssimpLog {
  public:
   AssimpLog() : lock_(mutex()) {
@@ -253,12 +254,12 @@ class AssimpLog {
       if (e.error) return e.text;
     return {};
   }
-  // The first error, or warning of data dropped or out of range, or "".
+  // The first message of data dropped or out of range, or "".
   std::string first_repair() const {
     for (const Entry& e : entries_) {
       std::string lower = e.text;
       std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-      if (e.error || lower.find("dropped") != std::string::npos || lower.find("out of range") != std::string::npos ||
+      if (lower.find("dropped") != std::string::npos || lower.find("out of range") != std::string::npos ||
           lower.find("out-of-range") != std::string::npos)
         return e.text;
     }

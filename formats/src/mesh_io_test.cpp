@@ -294,6 +294,9 @@ TEST(MeshIo, FilesAssimpWouldRepairAreRefused) {
   good.replace(at, 9, "AAAADAAAA");
   test::write_text(dir / "ok.gltf", good);
   EXPECT_EQ(read_mesh(dir / "ok.gltf").n_faces(), 2u);
+  // assimp logs a missing material file as an error, but the geometry is whole: it reads.
+  test::write_text(dir / "nomtl.obj", "mtllib missing.mtl\nusemtl foo\nv 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n");
+  EXPECT_EQ(read_mesh(dir / "nomtl.obj").n_faces(), 1u);
 }
 
 TEST(MeshIo, NanCoordinateIsAnInputError) {
