@@ -248,10 +248,16 @@ class AssimpLog {
   AssimpLog(const AssimpLog&) = delete;
   AssimpLog& operator=(const AssimpLog&) = delete;
 
-  // The first error logged, or "" (a failed read's own message is often a later symptom).
-  std::string first_error() const {
-    for (const Entry& e : entries_)
-      if (e.error) return e.text;
+  // The error logged just before the last "Validation failed" one, or "": a failed
+  // validation is often the symptom of what a reader logged before it (an OFF short of faces
+  // leaves a face without indices).
+  std::string cause_of_validation_failure() const {
+    std::string before;
+    for (const Entry& e : entries_) {
+      if (!e.error) continue;
+      if (e.text.rfind("Validation failed", 0) == 0) return before;
+      before = e.text;
+    }
     return {};
   }
   // The first message of data dropped or out of range, or "".
@@ -324,7 +330,7 @@ Mesh read_mesh(const fs::path& path, MeshReadReport* report) {
   // Triangulate polygons in place; keep everything else as the file has it (no welding by
   // assimp, which would also merge corners we want to keep, no reordering).
   const aiScene* scene = nullptr;
-  std::string err, logged_error, repair;
+  std::string err, validation_cause, repair;
   {
     const AssimpLog log;
     try {
@@ -332,12 +338,12 @@ Mesh read_mesh(const fs::path& path, MeshReadReport* report) {
     } catch (const std::exception& e) {  // aiAssertViolation's, if assimp lets it through
       err = e.what();
     }
-    logged_error = log.first_error();
+    validation_cause = log.cause_of_validation_failure();
     repair = log.first_repair();
   }
   if (!scene || !scene->mRootNode) {
-    if (err.empty()) err = logged_error;
     if (err.empty()) err = importer.GetErrorString();
+    if (err.rfind("Validation failed", 0) == 0 && !validation_cause.empty()) err = validation_cause;
     err = err.substr(0, err.find('\n'));
     throw InputError(name, "cannot read mesh: " + (err.empty() ? std::string("unknown format") : err));
   }

@@ -297,6 +297,14 @@ TEST(MeshIo, FilesAssimpWouldRepairAreRefused) {
   // assimp logs a missing material file as an error, but the geometry is whole: it reads.
   test::write_text(dir / "nomtl.obj", "mtllib missing.mtl\nusemtl foo\nv 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n");
   EXPECT_EQ(read_mesh(dir / "nomtl.obj").n_faces(), 1u);
+  // ... and does not hide the real problem of a file that fails.
+  test::write_text(dir / "nomtl_bad.obj", "mtllib missing.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 9\n");
+  try {
+    read_mesh(dir / "nomtl_bad.obj");
+    ADD_FAILURE() << "a face past the vertices must be refused";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("nomtl_bad.obj: cannot read mesh: OBJ: vertex index out of range"), std::string::npos) << e.what();
+  }
 }
 
 TEST(MeshIo, NanCoordinateIsAnInputError) {
