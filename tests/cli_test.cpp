@@ -168,7 +168,8 @@ TEST(Cli, UvpackMipSafeAndDensity) {
   }
   EXPECT_NEAR(detailed_gain / other_gain, 16.0, 0.05) << "(2 / 0.5)^2 times the texels, relative to the flat charts";
   EXPECT_EQ(run("uvpack check " + (dir / "dense.obj").string() + " --size 64 --padding 2 --fail-on overlap,shared,padding,outside").code, 0);
-  EXPECT_EQ(run("uvpack pack " + cube + " -o " + (dir / "x.obj").string() + " --density " + (dir / "missing.exr").string()).code, 2);
+  EXPECT_EQ(run("uvpack pack " + cube + " -o " + (dir / "x.obj").string() + " --density " + (dir / "missing.exr").string()).code, 3)
+      << "a missing input file, as everywhere";
 }
 
 TEST(Cli, BadUsageExitsTwo) {
@@ -198,6 +199,30 @@ TEST(Cli, BadUsageExitsTwo) {
     EXPECT_EQ(r.err.rfind("meso: error: --", 0), 0u) << r.err;
     EXPECT_LT(r.err.size(), 120u) << r.err;
   }
+}
+
+// Output names that cannot work are refused before any work, naming the user's path (they
+// failed after the work with exit 4, naming the temporary file, or silently lost an output).
+TEST(Cli, OutputsThatCannotBeWrittenAreUsageErrors) {
+  test::TempDir dir;
+  write_mesh(test::make_grid(2, 2), dir / "grid.obj");
+  const std::string grid = (dir / "grid.obj").string();
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"uvpack check " + grid + " --size 16 -o " + (dir / "ov.xyz").string(), "unknown image extension"},
+      {"uvpack check " + grid + " --size 16 -o " + (dir / "same.png").string() + " --report " + (dir / "same.png").string(),
+       "same.png: named for two outputs of this run"},
+      {"uvpack check " + grid + " --size 16 --report " + (dir / "nodir").string() + "/", "nodir/: names a folder"},
+      {"meshreduce " + grid + " -o /proc/meso-test.obj --faces 4", "/proc/meso-test.obj: cannot write there: "},
+  };
+  for (const auto& [args, message] : cases) {
+    const Result r = run(args);
+    EXPECT_EQ(r.code, 2) << args << "\n" << r.err;
+    EXPECT_EQ(lines(r.err), 1u) << r.err;
+    EXPECT_NE(r.err.find(message), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find(".meso-tmp"), std::string::npos) << r.err;
+  }
+  EXPECT_FALSE(fs::exists(dir / "same.png"));
+  EXPECT_FALSE(fs::exists(dir / "nodir"));
 }
 
 TEST(Cli, BadInputExitsThreeWithOneLineNamingTheFileAndNoOutput) {
@@ -259,6 +284,7 @@ TEST(Cli, BadInputExitsThreeWithOneLineNamingTheFileAndNoOutput) {
       {"streams cone " + (dir / "damaged.png").string() + " -o " + (dir / "o.exr").string(), "damaged.png: cannot read image data"},
 #endif
       {"meshreduce --from-progressive " + dir.path().string() + " --faces 10 -o " + out, "is a folder"},
+      {"uvpack pack " + (dir / "flatuv.obj").string() + " -o " + out + " --density " + (dir / "nope.exr").string(), "nope.exr: no such file"},
   };
   for (const auto& c : cases) {
     const Result r = run(c.args);

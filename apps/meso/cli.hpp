@@ -52,6 +52,8 @@ extern const CLI::Validator Finite;
 // Finite and above 0; finite and 0 or more.
 extern const CLI::Validator Positive;
 extern const CLI::Validator NonNegative;
+// A file name write_image takes (.png, .exr, .tif).
+extern const CLI::Validator ImageOutput;
 
 // "512" or "512x256" -> width, height. Throws UsageError.
 void parse_size(const std::string& text, int& width, int& height);

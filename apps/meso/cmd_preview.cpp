@@ -94,7 +94,8 @@ void add_preview(CLI::App& app, Context& ctx) {
   sub->add_flag("--headless", args->headless, "Render off screen (EGL, no display needed) to --png");
   sub->add_option("--png", args->png,
                   "Output image for --headless (RGBA PNG, 8 bit); with --compare, the reference image (in --shade); in the window "
-                  "with --frames, its last frame");
+                  "with --frames, its last frame")
+      ->check(ImageOutput);
   sub->add_option("--frames", args->frames, "Window: close after N frames (scripted runs; the report gives the median frame time)")
       ->check(CLI::Range(1, 1000000));
   sub->add_option("--size", args->size, "Image size WxH");

@@ -80,7 +80,7 @@ void add_uvpack(CLI::App& app, Context& ctx) {
                     "Also check that no texel of MIP levels 0..K that a chart's bilinear lookups read holds another chart's values "
                     "(after the bake's dilation; box-filtered levels; --size a multiple of 2^K)")
       ->check(CLI::Range(0, 14));
-  check->add_option("-o,--overlay", args->overlay, "Overlay PNG (RGBA): red = shared texels, blue = used once");
+  check->add_option("-o,--overlay", args->overlay, "Overlay PNG (RGBA): red = shared texels, blue = used once")->check(ImageOutput);
   check->add_option("--report", args->report, "JSON report file");
   check->add_option("--fail-on", args->fail_on, "Exit 1 when any of these is found: overlap,shared,flipped,degenerate,outside,padding,mip")
       ->delimiter(',')
@@ -188,8 +188,7 @@ void add_uvpack(CLI::App& app, Context& ctx) {
       ->check(CLI::Range(0, 14));
   pack->add_option("--density", pack_args->density,
                    "A map in the mesh's current UV layout (e.g. a first bake's displacement or normal map): charts are scaled by the "
-                   "detail it holds (RMS gradient), within --density-clamp, so detailed charts get more texels")
-      ->check(CLI::ExistingFile);
+                   "detail it holds (RMS gradient), within --density-clamp, so detailed charts get more texels");  // a missing file: exit 3 on reading, as every input
   pack->add_option("--density-clamp", pack_args->density_clamp, "Largest growth or shrink of a chart's linear scale by --density")
       ->check(CLI::Range(1.0, 16.0) & Finite)
       ->capture_default_str();

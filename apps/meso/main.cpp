@@ -2,6 +2,8 @@
 // 2 bad usage, 3 bad input, 4 internal error (meso/core/error.hpp).
 #include "cli.hpp"
 
+#include "meso/formats/image_io.hpp"
+
 #include "meso/core/error.hpp"
 
 #include <spdlog/sinks/stdout_color_sinks.h>
@@ -58,6 +60,11 @@ CLI::Validator sign_check(bool zero_allowed, const char* what, const char* name)
       name);
 }
 }  // namespace
+const CLI::Validator ImageOutput(
+    [](std::string& text) -> std::string {
+      return is_writable_image_extension(text) ? std::string() : "'" + text + "': unknown image extension (use .png, .exr or .tif)";
+    },
+    "IMAGE");
 const CLI::Validator Positive = sign_check(false, "a finite number above 0", "POSITIVE");
 const CLI::Validator NonNegative = sign_check(true, "a finite number of 0 or more", "NONNEGATIVE");
 

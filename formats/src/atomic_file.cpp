@@ -2,7 +2,11 @@
 
 #include "meso/core/error.hpp"
 
+#include <fcntl.h>
 #include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 
 #include <fstream>
 #include <string>
@@ -25,6 +29,12 @@ OutputSet::~OutputSet() {
 fs::path OutputSet::add(const fs::path& final_path) {
   std::error_code ec;
   if (fs::is_directory(final_path, ec)) throw UsageError(final_path.string() + ": is a folder, not an output file");
+  if (!final_path.has_filename()) throw UsageError(final_path.string() + ": names a folder (a trailing /), not an output file");
+  // Two outputs of one run under one name: the second would silently replace the first.
+  const fs::path same = fs::weakly_canonical(fs::absolute(final_path, ec), ec);
+  for (const auto& e : entries_)
+    if (fs::weakly_canonical(fs::absolute(e.final, ec), ec) == same)
+      throw UsageError(final_path.string() + ": named for two outputs of this run");
   const fs::path parent = final_path.has_parent_path() ? final_path.parent_path() : fs::path(".");
   for (fs::path p = parent; !p.empty(); p = p.parent_path()) {
     if (fs::exists(p, ec) && !fs::is_directory(p, ec)) throw UsageError(p.string() + ": is a file, not a folder");
@@ -37,12 +47,18 @@ fs::path OutputSet::add(const fs::path& final_path) {
     if (p == p.parent_path()) break;
   }
   fs::create_directories(parent, ec);
-  if (ec) throw InternalError(parent.string() + ": cannot create folder: " + ec.message());
+  if (ec) throw UsageError(parent.string() + ": cannot create folder: " + ec.message());
   if (!fs::is_directory(parent)) throw UsageError(parent.string() + ": is not a folder");
   created_folders_.insert(created_folders_.end(), missing.begin(), missing.end());
   const fs::path temp =
       parent / (".meso-tmp-" + std::to_string(::getpid()) + "-" + std::to_string(entries_.size()) + "-" +
                 final_path.filename().string());
+  // Fail now, naming the user's path and the reason, if the folder takes no new file (a
+  // read-only folder, /proc): later the writer would name the temporary file.
+  const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+  if (fd < 0) throw UsageError(final_path.string() + ": cannot write there: " + std::strerror(errno));
+  ::close(fd);
+  fs::remove(temp, ec);
   entries_.push_back({temp, final_path});
   return temp;
 }

@@ -6,6 +6,7 @@
 
 #include <dlfcn.h>
 
+#include <cctype>
 #include <cstdlib>
 #include <string>
 
@@ -33,6 +34,12 @@ const ImageIoBackend& backend() {
 }
 
 }  // namespace
+
+bool is_writable_image_extension(const std::filesystem::path& path) {
+  std::string e = path.extension().string();
+  for (char& c : e) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return e == ".png" || e == ".exr" || e == ".tif" || e == ".tiff";
+}
 
 Image read_image(const std::filesystem::path& path) { return backend().read_image(path); }
 

@@ -19,7 +19,9 @@ class OutputSet {
   // Registers `final_path` and returns the temporary path to write it to. The temporary
   // keeps the extension (image and mesh writers choose the format by it) and is hidden
   // (".meso-tmp-<pid>-<n>-<name>"). Creates missing parent folders, and removes them again
-  // if the set is never committed. Throws UsageError if `final_path` is an existing folder.
+  // if the set is never committed. Throws UsageError if `final_path` is an existing folder or
+  // ends in a separator, was already added (two outputs under one name), or its folder
+  // takes no new file (checked by creating the temporary and removing it again).
   std::filesystem::path add(const std::filesystem::path& final_path);
 
   // add() and write `text` to the temporary, checking that the write and close succeeded.

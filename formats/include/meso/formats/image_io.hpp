@@ -16,6 +16,10 @@ enum class PixelFormat { float32, half, uint8, uint16 };
 // Throws InputError naming the file if it is missing, unreadable or not an image.
 Image read_image(const std::filesystem::path& path);
 
+// Whether write_image takes this file name: .png, .exr, .tif or .tiff (any case). The
+// commands check the names a user gives before any work.
+bool is_writable_image_extension(const std::filesystem::path& path);
+
 // Writes `image` to `path`; the format follows the extension (.exr, .png, .tif). Integer
 // formats clamp to [0,1] and round to nearest. NaN samples are a bug: throws InternalError
 // rather than writing one. Not atomic by itself: pass a path from OutputSet::add().
