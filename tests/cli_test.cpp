@@ -1523,6 +1523,23 @@ TEST(CliBake, PercentReachResolvesAgainstTheHighDiagonal) {
 // window closes itself after 2 frames and writes its last one; it must match the headless
 // render of the same view in every pixel below the on-screen line (the top 16 rows), to the
 // 8-bit framebuffer's rounding.
+// Embree asserts (exit 134) on rays and geometry beyond about 1.8e18 units: the reference
+// refuses a mesh that spans more (exit 2, one line), and the camera options are bounded.
+TEST(CliPreview, CompareRefusesAMeshBeyondTheReferenceRange) {
+  test::TempDir dir;
+  Mesh huge = test::make_grid(2, 2);
+  for (auto v : huge.vertices()) huge.set_point(v, huge.point(v) * std::ldexp(1.0f, 70));  // ~1.2e21 across
+  write_mesh(huge, dir / "huge.obj");
+  const std::string obj = (dir / "huge.obj").string();
+  ASSERT_EQ(run("bake --low " + obj + " --high " + obj + " -o " + (dir / "maps").string() + " --size 16").code, 0);
+  const Result r = run("preview " + obj + " --maps " + (dir / "maps").string() + " --compare --method pom --size 8x8");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_EQ(lines(r.err), 1u) << r.err;
+  EXPECT_NE(r.err.find("rescale the mesh"), std::string::npos) << r.err;
+  for (const char* option : {"--pan 1e20,0", "--zoom 1e39", "--azimuth 1e39", "--light-azimuth 1e39"})
+    EXPECT_EQ(run("preview " + obj + " --maps " + (dir / "maps").string() + " --compare --method pom --size 8x8 " + option).code, 2) << option;
+}
+
 TEST(CliPreview, WindowDrawsWhatHeadlessDraws) {
   if (std::system("command -v xvfb-run >/dev/null 2>&1") != 0) {
     if (const char* required = std::getenv("MESO_REQUIRE_PEERS"); required && std::string(required) == "1")

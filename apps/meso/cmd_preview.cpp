@@ -102,12 +102,12 @@ void add_preview(CLI::App& app, Context& ctx) {
   sub->add_option("--view-angle", args->options.camera.view_angle,
                   "Degrees between the view direction and the mesh's mean normal (0 to 89.9)")
       ->check(CLI::Range(0.0, 89.9) & Finite);
-  sub->add_option("--azimuth", args->options.camera.azimuth, "Degrees around the mean normal")->check(Finite);
-  sub->add_option("--zoom", args->options.camera.zoom, "Zoom factor (> 1 moves closer)")->check(Positive);
+  sub->add_option("--azimuth", args->options.camera.azimuth, "Degrees around the mean normal")->check(CLI::Range(-3600.0, 3600.0) & Finite);
+  sub->add_option("--zoom", args->options.camera.zoom, "Zoom factor (> 1 moves closer)")->check(CLI::Range(1e-3, 1e3) & Finite);
   sub->add_option("--pan", args->pan, "X,Y: move the view right and up by X and Y framing radii (half the mesh's box diagonal)")
       ->expected(2)
       ->delimiter(',')
-      ->check(Finite);
+      ->check(CLI::Range(-1e3, 1e3) & Finite);
   sub->add_option("--iterations", args->options.iterations, "Main iteration budget of the method")->check(CLI::Range(1, 4096));
   sub->add_option("--shade", args->shade, "lit, uv (visible point's UV in R,G) or height")
       ->check(CLI::IsMember({"lit", "uv", "height"}));
@@ -118,7 +118,7 @@ void add_preview(CLI::App& app, Context& ctx) {
       ->check(CLI::Range(0.0, 45.0) & Finite);
   sub->add_option("--light-elevation", args->options.camera.light_elevation, "Light: degrees above the mesh's mean plane")
       ->check(CLI::Range(-90.0, 90.0) & Finite);
-  sub->add_option("--light-azimuth", args->options.camera.light_azimuth, "Light: degrees around the mean normal")->check(Finite);
+  sub->add_option("--light-azimuth", args->options.camera.light_azimuth, "Light: degrees around the mean normal")->check(CLI::Range(-3600.0, 3600.0) & Finite);
   sub->add_flag("--silhouettes", args->options.silhouettes,
                 "Curved rays for steep/relief/pom (the base's curvature along the view, section 5.1 of the survey; rays that "
                 "leave the surface are discarded) and, on maps that do not tile, discard visible points off the map");

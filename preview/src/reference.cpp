@@ -20,6 +20,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <limits>
 #include <stdexcept>
 #include <vector>
@@ -639,6 +640,16 @@ struct ReferenceRenderer::Impl {
   Image render(const PreviewOptions& o) const {
     if (o.width < 1 || o.height < 1) throw UsageError("reference: image size must be positive");
     const CameraPose pose = frame_camera(base, o.camera, static_cast<float>(o.width) / static_cast<float>(o.height));
+    // Embree takes ray origins and geometry within about 1.8e18 of its origin (FLT_LARGE; it
+    // asserts beyond): a mesh or camera farther out is refused rather than crashed on.
+    const Box3 box = bounding_box(base);
+    const double reach = std::max((pose.eye_d - origin).norm(), 0.5 * box.diagonal());
+    if (!(reach < 1e18)) {
+      char need[32];
+      std::snprintf(need, sizeof need, "%.3g", reach);
+      throw UsageError("the reference ray tracer (Embree, float) reaches 1e18 units from the mesh's centre; this mesh and camera need " +
+                       std::string(need) + ": rescale the mesh, or zoom in");
+    }
     Image out(o.width, o.height, 4, 0.0f);
     tbb::parallel_for(tbb::blocked_range<int>(0, o.height), [&](const tbb::blocked_range<int>& rows) {
       for (int y = rows.begin(); y < rows.end(); ++y)
