@@ -187,6 +187,10 @@ TEST(Cli, BadUsageExitsTwo) {
   EXPECT_EQ(run("preview base.obj --maps d --headless --png p.png --pan 0.5,inf").code, 2);
   EXPECT_EQ(run("meshreduce in.obj -o out.obj --ratio nan").code, 2);
   EXPECT_EQ(run("streams sdf h.exr -o s.exr --relief inf").code, 2);
+  // Finite as doubles but not as floats: they became inf in metadata, null in JSON, or NaN maps.
+  EXPECT_EQ(run("streams sdf h.exr -o s.exr --relief 1e39").code, 2);
+  EXPECT_EQ(run("streams vdm h.exr -o v.exr --relief 1e39").code, 2);
+  EXPECT_EQ(run("streams dstream --low a.obj --high b.obj -o d.bin --front 1e39").code, 2);
   EXPECT_EQ(run("streams cone h.exr -o c.exr --tolerance nan").code, 2);
   EXPECT_EQ(run("streams cone h.exr -o c.png").code, 2) << "streams are EXR: refused before any work";
   // An option's own check speaks in one line of meso's form, naming the option and the value
@@ -296,6 +300,18 @@ TEST(Cli, BadInputExitsThreeWithOneLineNamingTheFileAndNoOutput) {
     EXPECT_FALSE(fs::exists(dir / "o.exr"));
     EXPECT_TRUE(!fs::exists(dir / "maps") || fs::is_empty(dir / "maps")) << "no partial bake output";
   }
+}
+
+// streams vdm holds its raw table in memory: options that would make it larger than 2 GiB
+// are refused up front (exit 2, one line) instead of exhausting the machine.
+TEST(Cli, StreamsVdmRefusesATableBeyondItsMemoryLimit) {
+  test::TempDir dir;
+  write_image(Image(64, 64, 1, 0.5f), dir / "h.exr", PixelFormat::float32);
+  const Result r = run("streams vdm " + (dir / "h.exr").string() + " -o " + (dir / "v.exr").string() + " --theta 256 --phi 1024");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_EQ(lines(r.err), 1u) << r.err;
+  EXPECT_NE(r.err.find("4.0 GiB"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "v.exr"));
 }
 
 // A height map with non-finite texels: every stream exits 3 with one line naming the file and

@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <filesystem>
 #include <cmath>
 #include <sstream>
@@ -203,7 +204,7 @@ void add_streams(CLI::App& app, Context& ctx) {
   vdm_cmd->add_option("--curvatures", vdm->curvatures, "Comma-separated curvatures along the view direction, per unit of u, increasing (default: 0, a flat base; with --mesh: from the mesh)");
   vdm_cmd->add_option("--mesh", vdm->mesh, "Base mesh: relief from its size (unless --relief) and curvature slices from quadric fits (unless --curvatures)");
   vdm_cmd->add_option("--curvature-steps", vdm->curvature_steps, "With --mesh: curvature samples over the mesh's range (5th percentile of k2 to 95th of k1; 1: the median mean curvature)")->check(CLI::Range(1, 64))->capture_default_str();
-  vdm_cmd->add_option("--relief", vdm->options.relief, "Height range in units of u (default 0.1, or from --mesh)")->check(Positive);
+  vdm_cmd->add_option("--relief", vdm->options.relief, "Height range in units of u (default 0.1, or from --mesh)")->check(CLI::Range(1e-9, 1e9) & Finite);
   vdm_cmd->add_option("--max-error", vdm->max_error, "Largest RMS error of the compressed table, units of u")->check(NonNegative)->capture_default_str();
   vdm_cmd->add_option("--max-rank", vdm->max_rank, "Largest number of PCA components")->check(CLI::Range(0, 4096))->capture_default_str();
   vdm_cmd->callback([&ctx, vdm_args, vdm, vdm_cmd] {
@@ -244,6 +245,17 @@ void add_streams(CLI::App& app, Context& ctx) {
         mesh_report["object_length_per_u"] = per_u;
         mesh_report["curvature_range"] = {lo, hi};
         mesh_report["curvatures_per_u"] = o.curvatures;
+      }
+      // The raw table is held whole before it is compressed (W x H texels x theta x phi x
+      // curvatures floats), and compressing it takes about as much again. Past 2 GiB it is
+      // refused before any work (a 128^2 map with the in-range --theta 256 --phi 1024 had
+      // reached 17 GB when it was stopped).
+      const double table_bytes = static_cast<double>(field.texel_count()) * o.theta * o.phi * static_cast<double>(std::max<size_t>(1, o.curvatures.size())) * sizeof(float);
+      if (table_bytes > 2.0 * (1ull << 30)) {
+        char gib[32];
+        std::snprintf(gib, sizeof gib, "%.1f", table_bytes / (1ull << 30));
+        throw UsageError("streams vdm: the raw table would take " + std::string(gib) + " GiB (texels x --theta x --phi x curvatures, 4 bytes each); "
+                         "the limit is 2 GiB: lower --theta, --phi or the curvature count");
       }
       const VdmTable table = build_vdm(field, o, progress);
       const CompressedVdm c = compress_vdm(table, vdm->max_error, vdm->max_rank);
@@ -288,8 +300,8 @@ void add_streams(CLI::App& app, Context& ctx) {
   dstream->add_option("--high", ds->high, "High-poly mesh")->required();
   dstream->add_option("-o,--output", ds->output, "Output file (dstream.bin, docs/formats.md)")->required();
   dstream->add_option("--levels", ds->options.levels, "Levels 0..L-1, level l with 2^l segments per edge")->check(CLI::Range(1, 7))->capture_default_str();
-  dstream->add_option("--front", ds->front, "Ray reach outward, object units (0: 5% of the high mesh's diagonal)")->check(NonNegative);
-  dstream->add_option("--back", ds->back, "Ray reach inward, object units (0: as --front)")->check(NonNegative);
+  dstream->add_option("--front", ds->front, "Ray reach outward, object units (0: 5% of the high mesh's diagonal)")->check(CLI::Range(0.0, 1e30) & Finite);
+  dstream->add_option("--back", ds->back, "Ray reach inward, object units (0: as --front)")->check(CLI::Range(0.0, 1e30) & Finite);
   dstream->callback([&ctx, ds] {
     ctx.run = [&ctx, ds](nlohmann::json& report, Progress& progress) {
       nlohmann::json low_report, high_report;
@@ -338,7 +350,7 @@ void add_streams(CLI::App& app, Context& ctx) {
                                         "Output EXR: W x (H * depth), slices stacked, slice 0 lowest", *sdf_args);
   sdf->add_option("--depth", sdf_options->depth, "Slices along the height axis")->check(CLI::Range(1, 1024));
   sdf->add_option("--relief", sdf_options->relief, "Height range in units of the map's width (the box is 1 x H/W x relief)")
-      ->check(Positive);
+      ->check(CLI::Range(1e-9, 1e9) & Finite);
   sdf->callback([&ctx, sdf_args, sdf_options] {
     ctx.run = [&ctx, sdf_args, sdf_options](nlohmann::json& report, Progress& progress) {
       const HeightField field = load_height_field(*sdf_args);
