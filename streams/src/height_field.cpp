@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <string>
+#include <variant>
 
 namespace meso {
 
@@ -34,22 +37,42 @@ ImageMetadata height_field_metadata(const HeightField& field) {
           {"border", std::string(border_name(field.border))}};
 }
 
+namespace {
+// A numeric attribute (EXR stores floats; PNG text chunks bring them back as text), or NaN.
+float metadata_number(const ImageMetadata& m, const char* key) {
+  const auto it = m.find(key);
+  if (it == m.end()) return std::nanf("");
+  if (const float* f = std::get_if<float>(&it->second)) return *f;
+  if (const int* i = std::get_if<int>(&it->second)) return static_cast<float>(*i);
+  const std::string& text = std::get<std::string>(it->second);
+  char* end = nullptr;
+  const float v = std::strtof(text.c_str(), &end);
+  return end != text.c_str() && *end == '\0' ? v : std::nanf("");
+}
+}  // namespace
+
 HeightField make_height_field(const Image& image, Border border) {
   HeightField hf;
   hf.border = border;
   hf.height = Image(image.width, image.height, 1);
-  float lo = image.pixels.empty() ? 0.0f : image.pixels[0], hi = lo;
-  for (size_t i = 0; i < image.texel_count(); ++i) {
+  // A map that records its own mapping to object units (bake's displacement.png, a stream)
+  // holds bias + scale * value: taken back to object units first, so that its stream has the
+  // height range of the displacement.exr it came from.
+  const float in_scale = metadata_number(image.metadata, "height_scale"), in_bias = metadata_number(image.metadata, "height_bias");
+  const bool mapped = std::isfinite(in_scale) && std::isfinite(in_bias) && in_scale >= 0;
+  const auto value = [&](size_t i) {
     const float v = image.pixels[i * static_cast<size_t>(image.channels)];
-    lo = std::min(lo, v);
-    hi = std::max(hi, v);
+    return mapped ? in_bias + in_scale * v : v;
+  };
+  float lo = image.pixels.empty() ? 0.0f : value(0), hi = lo;
+  for (size_t i = 0; i < image.texel_count(); ++i) {
+    lo = std::min(lo, value(i));
+    hi = std::max(hi, value(i));
   }
   hf.bias = lo;
   hf.scale = hi - lo;
-  for (size_t i = 0; i < image.texel_count(); ++i) {
-    const float v = image.pixels[i * static_cast<size_t>(image.channels)];
-    hf.height.pixels[i] = hf.scale > 0 ? std::clamp((v - lo) / hf.scale, 0.0f, 1.0f) : 0.0f;
-  }
+  for (size_t i = 0; i < image.texel_count(); ++i)
+    hf.height.pixels[i] = hf.scale > 0 ? std::clamp((value(i) - lo) / hf.scale, 0.0f, 1.0f) : 0.0f;
   return hf;
 }
 

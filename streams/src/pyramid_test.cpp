@@ -32,6 +32,24 @@ TEST(HeightField, NormalisesWithScaleAndBias) {
   for (float v : flat.height.pixels) EXPECT_EQ(v, 0.0f);
 }
 
+// A map that records its mapping to object units (bake's displacement.png, with the numbers
+// as PNG text) gives the field of the object-unit map it encodes.
+TEST(HeightField, TakesARecordedMappingBackToObjectUnits) {
+  Image png(3, 1, 1);
+  png.pixels = {0.0f, 0.25f, 1.0f};
+  png.metadata = {{"height_bias", std::string("-0.5")}, {"height_scale", std::string("2")}};
+  const HeightField f = make_height_field(png, Border::clamp);
+  EXPECT_EQ(f.bias, -0.5f);
+  EXPECT_EQ(f.scale, 2.0f);
+  EXPECT_EQ(f.height.pixels, (LargeVector<float>{0.0f, 0.25f, 1.0f}));
+  png.pixels = {0.25f, 0.5f, 0.75f};  // not spanning [0, 1]: object heights 0, 0.5, 1
+  png.metadata = {{"height_bias", -0.5f}, {"height_scale", 2.0f}};
+  const HeightField g = make_height_field(png, Border::clamp);
+  EXPECT_EQ(g.bias, 0.0f);
+  EXPECT_EQ(g.scale, 1.0f);
+  EXPECT_EQ(g.height.pixels, (LargeVector<float>{0.0f, 0.5f, 1.0f}));
+}
+
 TEST(Pyramid, SpikeHasTheKnownBilinearBounds) {
   Image img(5, 5, 1, 0.0f);
   img.at(2, 2) = 1.0f;

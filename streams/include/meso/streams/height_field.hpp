@@ -37,7 +37,9 @@ inline float bilinear_blend(float a, float b, float c, float d, float tx, float 
 
 // Takes channel 0 of `image` (a baked displacement.exr in object units, or any grey height
 // map) and normalises it: bias = its minimum, scale = max - min (0 for a flat map, whose
-// normalised heights are all 0).
+// normalised heights are all 0). A map whose metadata gives height_scale and height_bias
+// (bake's displacement.png: object = bias + scale * value) is taken back to object units
+// first.
 HeightField make_height_field(const Image& image, Border border);
 
 // The header attributes every stream file carries about its height field: height_scale,
