@@ -289,6 +289,9 @@ TEST(Cli, BadInputExitsThreeWithOneLineNamingTheFileAndNoOutput) {
 #endif
       {"meshreduce --from-progressive " + dir.path().string() + " --faces 10 -o " + out, "is a folder"},
       {"uvpack pack " + (dir / "flatuv.obj").string() + " -o " + out + " --density " + (dir / "nope.exr").string(), "nope.exr: no such file"},
+      {"uvpack pack " + (dir / "flatuv.obj").string() + " -o " + out, "flatuv.obj: its UVs have no area"},
+      {"frames " + (dir / "flatuv.obj").string() + " -o " + (dir / "o.glb").string() + " --curvature-map " + (dir / "o.exr").string() + " --size 16",
+       "flatuv.obj: its UV triangles cover no texel"},
   };
   for (const auto& c : cases) {
     const Result r = run(c.args);

@@ -68,6 +68,8 @@ void add_frames(CLI::App& app, Context& ctx) {
       CurvatureMap cmap;
       if (want_map) {
         cmap = bake_curvature_map(mesh, frames, curvature, map_options);
+        if (cmap.texels == 0)
+          throw InputError(args->input, "its UV triangles cover no texel of the curvature map (degenerate or outside [0, 1])");
         write_image(cmap.image, outputs.add(args->curvature_map), PixelFormat::float32);
         if (cmap.undefined)
           warn(ctx.globals, args->curvature_map + ": " + std::to_string(cmap.undefined) + " texels have no tangent frame (filled from neighbours)");

@@ -10,6 +10,7 @@
 #include "meso/uvpack/uv_unwrap.hpp"
 
 #include <algorithm>
+#include <numeric>
 #include <chrono>
 #include <cmath>
 #include <map>
@@ -246,6 +247,11 @@ void add_uvpack(CLI::App& app, Context& ctx) {
                               "only the level-0 padding is kept: add --clamp if the atlas is sampled that way");
       if (2 * atlas_border_margin(o) >= o.size)
         throw UsageError("--padding " + std::to_string(o.padding) + " leaves no texel inside a " + std::to_string(o.size) + "-texel atlas");
+      {
+        const std::vector<double> areas = chart_uv_areas(mesh);
+        if (!(std::accumulate(areas.begin(), areas.end(), 0.0) > 0))
+          throw InputError(pack_args->input, "its UVs have no area (all at one point or on a line): nothing to pack; --unwrap makes new ones");
+      }
       UvPackReport r;
       const auto pack_start = std::chrono::steady_clock::now();
       try {
