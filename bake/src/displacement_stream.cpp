@@ -93,6 +93,17 @@ DisplacementStream sample_displacement_stream(const Mesh& base, const Mesh& high
             displacement_stream_point(base, t, s, i, j, pm, nm);
             const Eigen::Vector3d p(pm[0], pm[1], pm[2]), n(nm[0], nm[1], nm[2]);
             double d = n.norm() > 1e-12 ? cast(p, n) : std::nan("");
+            if (std::isnan(d) && n.norm() > 1e-12) {
+              // A point on the base's open border misses a high mesh whose border lies right
+              // over it about half the time (the hit falls on the high edge's outer side by a
+              // rounding): cast again from a point moved 1e-4 of the way toward the base's
+              // centre, within the tangent plane. The move depends on p and n only, which
+              // are bit-identical in the triangles sharing the point: still crack-free.
+              const Eigen::Vector3d unit = n.normalized();
+              Eigen::Vector3d inward = origin - p;
+              inward -= unit * unit.dot(inward);
+              d = cast(p + 1e-4 * inward, n);
+            }
             if (std::isnan(d)) {
               d = 0;
               ++misses[static_cast<size_t>(t)];
