@@ -125,7 +125,34 @@ const char* hit_rule_name(HitRule r) {
   return "nearest";
 }
 
+namespace {
+BakeResult bake_at_scale(const Mesh& low, const Mesh& high, const BakeOptions& o, Progress& progress);
+}  // namespace
+
+// Meshes far from unit size (a high mesh near 1e15 units missed every texel, one near 1e-19
+// too) are baked in the unit box: unit_scale_exponent() in ray_scene.hpp.
 BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progress& progress) {
+  const int e = unit_scale_exponent({&low, &high, o.cage});
+  if (e == 0) return bake_at_scale(low, high, o, progress);
+  const float to_unit = std::ldexp(1.0f, -e), from_unit = std::ldexp(1.0f, e);
+  const Mesh l = scaled_mesh(low, to_unit), h = scaled_mesh(high, to_unit);
+  const Mesh c = o.cage ? scaled_mesh(*o.cage, to_unit) : Mesh();
+  BakeOptions so = o;
+  so.front *= to_unit;
+  so.back *= to_unit;
+  so.bunch *= to_unit;
+  so.detail_scale *= to_unit;
+  if (o.cage) so.cage = &c;
+  BakeResult r = bake_at_scale(l, h, so, progress);
+  for (float& v : r.displacement.pixels) v *= from_unit;
+  for (float* x : {&r.front, &r.back, &r.bunch, &r.min_displacement, &r.max_displacement}) *x *= from_unit;
+  r.displacement.metadata["min"] = r.min_displacement;
+  r.displacement.metadata["max"] = r.max_displacement;
+  return r;
+}
+
+namespace {
+BakeResult bake_at_scale(const Mesh& low, const Mesh& high, const BakeOptions& o, Progress& progress) {
   if (!has_uvs(low)) throw std::logic_error("bake: base mesh without UVs");
   BakeResult r;
   const auto high_box = bounding_box(high);  // one pass over the high mesh's vertices
@@ -864,6 +891,7 @@ BakeResult bake(const Mesh& low, const Mesh& high, const BakeOptions& o, Progres
   r.normal_os.metadata = {{"quantity", std::string("normal")}, {"space", std::string("object")}};
   return r;
 }
+}  // namespace
 
 Image encode_normal_map(const Image& normal_ts) {
   Image out = normal_ts;

@@ -83,6 +83,32 @@ TEST(Bake, HugeCoordinatesKeepSmallDisplacementsExact) {
     }
 }
 
+// A mesh of any size a float holds bakes as at unit size (scaled into the unit box by a power
+// of two, results scaled back): near 1e15 units every texel missed, near 1e-19 too.
+TEST(Bake, AnyScaleAFloatHolds) {
+  const float a = 0.125f, b = -0.0625f, c = 0.0625f;
+  float unit_max = 0;
+  for (const int e : {0, 60, 100, -70, -110}) {  // 0 first: the unit-size reference
+    const float s = std::ldexp(1.0f, e);
+    Mesh low = test::make_grid(4, 2), high = make_plane(a, b, c);
+    for (Mesh* m : {&low, &high})
+      for (auto v : m->vertices()) m->set_point(v, m->point(v) * s);
+    BakeOptions o;
+    o.width = o.height = 24;
+    o.front = o.back = 0.5f * s;
+    const BakeResult r = bake(low, high, o);
+    EXPECT_EQ(r.misses, 0u) << e;
+    EXPECT_EQ(r.front, o.front) << e;
+    for (int y = 0; y < o.height; ++y)
+      for (int x = 0; x < o.width; ++x) {
+        const float u = texel_center_u(x, o.width), v = texel_center_v(y, o.height);
+        ASSERT_NEAR(r.displacement.at(x, y) / s, a * u + b * v + c, 2e-6f) << e << ": " << x << "," << y;
+      }
+    if (e == 0) unit_max = r.max_displacement;
+    EXPECT_NEAR(r.max_displacement / s, unit_max, 1e-6f) << e;
+  }
+}
+
 // The value every covered texel of a flat base (z = 0, normal +z) gets over `high`.
 // `result`: the whole bake, for its report.
 float baked_value(const Mesh& high, const BakeOptions& base_options, size_t* ambiguous = nullptr, BakeResult* result = nullptr) {

@@ -46,8 +46,30 @@ void displacement_stream_point(const Mesh& base, int t, int s, int i, int j, Ope
   }
 }
 
+namespace {
+DisplacementStream sample_at_scale(const Mesh& base, const Mesh& high, const DisplacementStreamOptions& o, Progress& progress);
+}  // namespace
+
+// Meshes far from unit size (near 1e20 units every ray left Embree's range) are sampled in
+// the unit box: unit_scale_exponent() in ray_scene.hpp.
 DisplacementStream sample_displacement_stream(const Mesh& base, const Mesh& high, const DisplacementStreamOptions& o,
                                               Progress& progress) {
+  const int e = unit_scale_exponent({&base, &high});
+  if (e == 0) return sample_at_scale(base, high, o, progress);
+  const float to_unit = std::ldexp(1.0f, -e), from_unit = std::ldexp(1.0f, e);
+  DisplacementStreamOptions so = o;
+  so.front *= to_unit;
+  so.back *= to_unit;
+  DisplacementStream out = sample_at_scale(scaled_mesh(base, to_unit), scaled_mesh(high, to_unit), so, progress);
+  for (DisplacementLevel& level : out.levels)
+    for (std::vector<float>* values : {&level.value, &level.coarse})
+      for (float& v : *values) v *= from_unit;
+  for (float* x : {&out.front, &out.back, &out.min_value, &out.max_value}) *x *= from_unit;
+  return out;
+}
+
+namespace {
+DisplacementStream sample_at_scale(const Mesh& base, const Mesh& high, const DisplacementStreamOptions& o, Progress& progress) {
   DisplacementStream out;
   out.triangles = static_cast<int>(base.n_faces());
   const float reach = 0.05f * bounding_box(high).diagonal();
@@ -154,6 +176,7 @@ DisplacementStream sample_displacement_stream(const Mesh& base, const Mesh& high
   for (size_t m : misses) out.misses += m;
   return out;
 }
+}  // namespace
 
 namespace {
 uint32_t quantise(float v, float lo, float hi) {

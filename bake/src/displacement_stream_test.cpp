@@ -73,6 +73,24 @@ TEST(DisplacementStream, BorderOverBorderIsFound) {
     for (const float v : level.value) ASSERT_NEAR(v, 0.01f, 1e-6f);
 }
 
+// Far from unit size (near 1e20 every ray left Embree's range) the samples are those of the
+// unit-size meshes, scaled.
+TEST(DisplacementStream, AnyScaleAFloatHolds) {
+  for (const int e : {66, -66}) {
+    const float s = std::ldexp(1.0f, e);
+    Mesh base = test::make_grid(4, 4);
+    Mesh high = base;
+    for (auto v : high.vertices()) high.set_point(v, (high.point(v) + Vec3f(0, 0, 0.01f)) * s);
+    for (auto v : base.vertices()) base.set_point(v, base.point(v) * s);
+    DisplacementStreamOptions o;
+    o.levels = 2;
+    const DisplacementStream st = sample_displacement_stream(base, high, o);
+    EXPECT_EQ(st.misses, 0u) << e;
+    for (const DisplacementLevel& level : st.levels)
+      for (const float v : level.value) ASSERT_NEAR(v / s, 0.01f, 1e-6f) << e;
+  }
+}
+
 // Two triangles sharing an edge compute the same value at every point of it, bit for bit,
 // over a curved base and a bumpy high surface (coordinates that float arithmetic rounds
 // differently depending on which end of the edge it starts from): crack-free tessellation.

@@ -13,9 +13,32 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <initializer_list>
 #include <limits>
 
 namespace meso {
+
+// Meshes far from unit size are baked scaled by a power of two into the unit box, which
+// every float operation carries exactly, and object-unit results are scaled back: the
+// bake's tests hold a few absolute floors (a determinant above 1e-12), and Embree takes
+// coordinates within 1.8e18. The exponent e brings the meshes' largest finite coordinate
+// into [0.5, 1); 0 when it lies within [2^-20, 2^20] already (the meshes are used as given).
+inline int unit_scale_exponent(std::initializer_list<const Mesh*> meshes) {
+  float largest = 0;
+  for (const Mesh* m : meshes)
+    if (m)
+      for (auto v : m->vertices())
+        for (int k = 0; k < 3; ++k)
+          if (std::isfinite(m->point(v)[k])) largest = std::max(largest, std::abs(m->point(v)[k]));
+  if (!(largest > 0) || (largest >= std::ldexp(1.0f, -20) && largest <= std::ldexp(1.0f, 20))) return 0;
+  return std::ilogb(largest) + 1;
+}
+
+inline Mesh scaled_mesh(const Mesh& m, float s) {
+  Mesh out = m;
+  for (auto v : out.vertices()) out.set_point(v, out.point(v) * s);
+  return out;
+}
 
 // RAII for an Embree scene over one mesh (positions copied once, with Embree's padding).
 // Positions are stored relative to `origin` (computed in double): far from the object-space
