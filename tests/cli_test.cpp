@@ -190,6 +190,7 @@ TEST(Cli, BadUsageExitsTwo) {
   // Finite as doubles but not as floats: they became inf in metadata, null in JSON, or NaN maps.
   EXPECT_EQ(run("streams sdf h.exr -o s.exr --relief 1e39").code, 2);
   EXPECT_EQ(run("streams vdm h.exr -o v.exr --relief 1e39").code, 2);
+  EXPECT_EQ(run("streams vdm h.exr -o v.exr --curvatures 0,0").code, 2) << "curvatures must increase strictly";
   EXPECT_EQ(run("streams dstream --low a.obj --high b.obj -o d.bin --front 1e39").code, 2);
   EXPECT_EQ(run("streams cone h.exr -o c.exr --tolerance nan").code, 2);
   EXPECT_EQ(run("streams cone h.exr -o c.png").code, 2) << "streams are EXR: refused before any work";
@@ -707,6 +708,19 @@ TEST_F(Skeleton, WholePipeline) {
                            (d / "stale").string() + " --method sphere-tracing --headless --png " + (d / "x.png").string());
   EXPECT_EQ(stale.code, 3) << stale.err;
   EXPECT_NE(stale.err.find((d / "stale" / "sdf.exr").string()), std::string::npos) << stale.err;
+
+  // A stream whose header numbers were damaged (NaN height_scale) is refused, naming it; it
+  // rendered with 96 % wrong hits.
+  {
+    std::vector<Image> bad_levels = read_image_levels(d / "pyramid.exr");
+    bad_levels[0].metadata["height_scale"] = std::nanf("");
+    std::filesystem::create_directories(d / "badmeta");
+    write_image_levels(bad_levels, d / "badmeta" / "pyramid.exr", PixelFormat::float32);
+    const Result bad = run("preview " + (d / "reduced.obj").string() + " --maps " + (d / "maps").string() + " --streams " +
+                           (d / "badmeta").string() + " --method pyramid --headless --png " + (d / "x.png").string() + " --size 16x16");
+    EXPECT_EQ(bad.code, 3) << bad.err;
+    EXPECT_NE(bad.err.find("pyramid.exr: meso:height_scale is nan"), std::string::npos) << bad.err;
+  }
 
   const Result no_stream = run("preview " + (d / "reduced.obj").string() + " --maps " + (d / "maps").string() +
                                " --method sphere-tracing --headless --png " + (d / "x.png").string());

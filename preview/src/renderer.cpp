@@ -51,7 +51,12 @@ float stream_number(const Image& stream, const char* key, const std::string& nam
   const auto it = stream.metadata.find(key);
   if (it == stream.metadata.end()) throw InputError(name, std::string("lacks the meso:") + key + " attribute of " + producer);
   if (const int* i = std::get_if<int>(&it->second)) return static_cast<float>(*i);
-  if (const float* f = std::get_if<float>(&it->second)) return *f;
+  if (const float* f = std::get_if<float>(&it->second)) {
+    // Every number meso writes in a stream header is finite and none is negative.
+    if (!std::isfinite(*f) || (*f < 0.0f && std::string(key) != "height_bias"))
+      throw InputError(name, std::string("meso:") + key + " is " + std::to_string(*f) + ", not a value " + producer + " writes");
+    return *f;
+  }
   throw InputError(name, std::string("meso:") + key + " is not a number");
 }
 
