@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <functional>
 #include <cstdio>
 #include <filesystem>
 #include <cmath>
@@ -211,7 +212,6 @@ void add_streams(CLI::App& app, Context& ctx) {
     vdm->relief_given = vdm_cmd->count("--relief") > 0;
     ctx.run = [&ctx, vdm_args, vdm](nlohmann::json& report, Progress& progress) {
       const auto start = std::chrono::steady_clock::now();
-      const HeightField field = load_height_field(*vdm_args);
       VdmOptions o = vdm->options;
       if (!vdm->curvatures.empty()) {
         o.curvatures.clear();
@@ -222,8 +222,11 @@ void add_streams(CLI::App& app, Context& ctx) {
           if (!parse_finite(item, v)) throw UsageError("--curvatures: '" + item + "' is not a number");
           o.curvatures.push_back(v);
         }
-        if (!std::is_sorted(o.curvatures.begin(), o.curvatures.end())) throw UsageError("--curvatures: the values must increase");
+        // Strictly: two equal slices would make the lookup's interpolation divide by zero.
+        if (std::adjacent_find(o.curvatures.begin(), o.curvatures.end(), std::greater_equal<float>()) != o.curvatures.end())
+          throw UsageError("--curvatures: the values must increase");
       }
+      const HeightField field = load_height_field(*vdm_args);  // after the options' checks: a usage error comes first
       nlohmann::json mesh_report;
       if (!vdm->mesh.empty()) {
         Mesh base = load_mesh(ctx.globals, vdm->mesh, mesh_report);
