@@ -321,8 +321,14 @@ Mesh read_mesh(const fs::path& path, MeshReadReport* report) {
   const std::string name = path.string();
   if (!fs::exists(path)) throw InputError(name, "no such file");
   if (fs::is_directory(path)) throw InputError(name, "is a folder, not a mesh file");
-  const size_t obj_untextured = lower_ext(path) == ".obj" ? check_obj_texcoords(file_text(path, name), name) : 0;
+  const bool obj = lower_ext(path) == ".obj";
+  const std::string obj_text = obj ? file_text(path, name) : std::string();
+  const size_t obj_untextured = obj ? check_obj_texcoords(obj_text, name) : 0;
   if (lower_ext(path) == ".ply") check_ascii_ply(file_text(path, name), name);
+  // A UTF-8 byte-order mark (some Windows tools write one) hides the OBJ's first line from
+  // assimp, which then reports an index out of range: such a file is read from memory, past
+  // the mark (its material library, which meso does not use, is then not looked for).
+  const bool bom = obj && obj_text.compare(0, 3, "\xEF\xBB\xBF") == 0;
   Assimp::Importer importer;
   // Coordinates are the file's own: a COLLADA up_axis is not turned into a rotation, so a
   // .dae base mesh and an .obj high mesh of one asset stay aligned.
@@ -334,7 +340,8 @@ Mesh read_mesh(const fs::path& path, MeshReadReport* report) {
   {
     const AssimpLog log;
     try {
-      scene = importer.ReadFile(name, aiProcess_Triangulate | aiProcess_ValidateDataStructure);
+      const unsigned flags = aiProcess_Triangulate | aiProcess_ValidateDataStructure;
+      scene = bom ? importer.ReadFileFromMemory(obj_text.data() + 3, obj_text.size() - 3, flags, "obj") : importer.ReadFile(name, flags);
     } catch (const std::exception& e) {  // aiAssertViolation's, if assimp lets it through
       err = e.what();
     }
@@ -345,6 +352,7 @@ Mesh read_mesh(const fs::path& path, MeshReadReport* report) {
     if (err.empty()) err = importer.GetErrorString();
     if (err.rfind("Validation failed", 0) == 0 && !validation_cause.empty()) err = validation_cause;
     err = err.substr(0, err.find('\n'));
+    if (err.find("contains no faces") != std::string::npos) throw InputError(name, "contains no faces");
     throw InputError(name, "cannot read mesh: " + (err.empty() ? std::string("unknown format") : err));
   }
   if (!repair.empty()) throw InputError(name, "damaged, not read (assimp: " + repair + ")");

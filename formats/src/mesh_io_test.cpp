@@ -307,6 +307,23 @@ TEST(MeshIo, FilesAssimpWouldRepairAreRefused) {
   }
 }
 
+// An OBJ with a UTF-8 byte-order mark reads (assimp missed its first line); one without
+// faces says so (assimp: "Validation failed: Mesh  contains no faces").
+TEST(MeshIo, ObjWithAByteOrderMarkReadsAndOneWithoutFacesSaysSo) {
+  test::TempDir dir;
+  test::write_text(dir / "bom.obj", "\xEF\xBB\xBFv 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nf 1/1 2/2 3/3\n");
+  const Mesh m = read_mesh(dir / "bom.obj");
+  EXPECT_EQ(m.n_faces(), 1u);
+  EXPECT_TRUE(has_uvs(m));
+  test::write_text(dir / "nofaces.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\n");
+  try {
+    read_mesh(dir / "nofaces.obj");
+    ADD_FAILURE() << "a mesh without faces must be refused";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), (dir / "nofaces.obj").string() + ": contains no faces");
+  }
+}
+
 TEST(MeshIo, NanCoordinateIsAnInputError) {
   test::TempDir dir;
   test::write_text(dir / "nan.obj", "v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n");
