@@ -1569,6 +1569,12 @@ TEST(CliPreview, CompareRefusesAMeshBeyondTheReferenceRange) {
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_EQ(lines(r.err), 1u) << r.err;
   EXPECT_NE(r.err.find("rescale the mesh"), std::string::npos) << r.err;
+  // Beyond the driver's size (llvmpipe: 16384): a usage error saying so (it was exit 4,
+  // "float framebuffer is not supported").
+  const Result wide = run("preview " + obj + " --maps " + (dir / "maps").string() + " --method pom --headless --png " +
+                          (dir / "w.png").string() + " --size 32768x1");
+  EXPECT_EQ(wide.code, 2) << wide.err;
+  EXPECT_NE(wide.err.find("pixels per side"), std::string::npos) << wide.err;
   for (const char* option : {"--pan 1e20,0", "--zoom 1e39", "--azimuth 1e39", "--light-azimuth 1e39"})
     EXPECT_EQ(run("preview " + obj + " --maps " + (dir / "maps").string() + " --compare --method pom --size 8x8 " + option).code, 2) << option;
 }

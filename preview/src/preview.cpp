@@ -74,6 +74,15 @@ class EglContext {
 class OffscreenTarget {
  public:
   OffscreenTarget(int w, int h) : width_(w), height_(h) {
+    // The driver's limits (llvmpipe: 16384 per side) are a usage error, said as such, not an
+    // incomplete framebuffer.
+    GLint max_size = 0, max_dims[2] = {0, 0};
+    glGetIntegerv(GL_MAX_RENDERBUFFER_SIZE, &max_size);
+    glGetIntegerv(GL_MAX_VIEWPORT_DIMS, max_dims);
+    const int limit = std::min({max_size, max_dims[0], max_dims[1]});
+    if (limit > 0 && (w > limit || h > limit))
+      throw UsageError("--size " + std::to_string(w) + "x" + std::to_string(h) + ": this OpenGL renders at most " + std::to_string(limit) +
+                       " pixels per side");
     glGenFramebuffers(1, &fbo_);
     glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
     glGenRenderbuffers(3, rb_);
@@ -89,7 +98,9 @@ class OffscreenTarget {
     const GLenum buffers[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
     glDrawBuffers(2, buffers);
     if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
-      throw InternalError("OpenGL: float framebuffer is not supported");
+      throw InternalError("OpenGL: cannot make a " + std::to_string(w) + "x" + std::to_string(h) +
+                          " float framebuffer (about " + std::to_string((28ull * static_cast<unsigned long long>(w) * static_cast<unsigned long long>(h)) >> 20) +
+                          " MiB; out of memory, or no float render targets)");
   }
   ~OffscreenTarget() {
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
