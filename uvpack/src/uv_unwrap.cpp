@@ -50,6 +50,11 @@ struct Geometry {
   std::vector<Vec3d> normal;         // unit; zero for degenerate faces
   std::vector<double> area;
   std::vector<uint8_t> degenerate;
+  // Positions are the mesh's, centred on its bounding box and scaled by a power of two that
+  // brings the box's longest side into [0.5, 1): the flattening and its tests then see one
+  // size whatever the units (ARAP at 1e4 units lost 4 % utilisation and stretched 1.3x, at
+  // 1e15 half the utilisation). Areas reported in object units are divided by unit^2.
+  double unit = 1;
   size_t faces() const { return area.size(); }
 };
 
@@ -63,9 +68,13 @@ Geometry make_geometry(const Mesh& mesh) {
   g.area.assign(nf, 0);
   g.degenerate.assign(nf, 0);
   g.position.resize(mesh.n_vertices());
+  const Box3 box = bounding_box(mesh);
+  const Vec3d centre = (Vec3d(box.lo[0], box.lo[1], box.lo[2]) + Vec3d(box.hi[0], box.hi[1], box.hi[2])) * 0.5;
+  const double side = std::max({double(box.hi[0]) - box.lo[0], double(box.hi[1]) - box.lo[1], double(box.hi[2]) - box.lo[2]});
+  if (side > 0 && std::isfinite(side)) g.unit = std::ldexp(1.0, -(std::ilogb(side) + 1));
   for (auto v : mesh.vertices()) {
     const Vec3f p = mesh.point(v);
-    g.position[static_cast<size_t>(v.idx())] = Vec3d(p[0], p[1], p[2]);
+    g.position[static_cast<size_t>(v.idx())] = (Vec3d(p[0], p[1], p[2]) - centre) * g.unit;
   }
   std::vector<int> corner_of_halfedge(mesh.n_halfedges(), -1);
   for (auto f : mesh.faces()) {
@@ -554,9 +563,10 @@ UvUnwrapReport unwrap_uv_charts(Mesh& mesh, const UvUnwrapOptions& options) {
   lay_out(mesh, g, u.done);
 
   report.charts = u.done.size();
-  double area = 0, l2 = 0, angle = 0, area_d = 0;
+  double area = 0, l2 = 0, angle = 0, area_d = 0;  // weights in the unit-box scale, as the sums
   for (const FlatChart& c : u.done) {
     report.per_chart.push_back(c.stats);
+    report.per_chart.back().area /= g.unit * g.unit;  // object units^2 again
     area += c.stats.area;
     l2 += c.stats.area * c.stats.stretch_l2 * c.stats.stretch_l2;
     angle += c.angle_sum;

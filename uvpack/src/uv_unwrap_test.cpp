@@ -112,6 +112,28 @@ TEST(UvUnwrap, CurvedSurfacesStayUnderTheStretchBound) {
   }
 }
 
+// The flattening does not depend on the units: a bumpy sheet in millimetres far from the
+// origin (x 10^4, offset 5 x 10^4) unwraps as in metres (ARAP lost 4 % utilisation and
+// stretched 1.3x at 10^4, LSCM did not); areas are reported in the mesh's own units.
+TEST(UvUnwrap, UnitsDoNotMatter) {
+  auto sheet = [](double scale, double offset) {
+    return test::make_parametric(16, 16, [=](double s, double t) {
+      const double z = 0.05 * std::sin(7 * s) * std::cos(5 * t);
+      return Vec3f(float(offset + scale * s), float(offset + scale * t), float(scale * z));
+    }, false, false);
+  };
+  for (const UnwrapMethod method : {UnwrapMethod::lscm, UnwrapMethod::arap}) {
+    UvUnwrapOptions o;
+    o.method = method;
+    Mesh m1 = without_uvs(sheet(1, 0)), mm = without_uvs(sheet(1e4, 5e4));
+    const UvUnwrapReport r1 = unwrap_uv_charts(m1, o), rm = unwrap_uv_charts(mm, o);
+    ASSERT_EQ(r1.charts, rm.charts);
+    EXPECT_NEAR(rm.stretch_l2, r1.stretch_l2, 1e-3 * r1.stretch_l2);
+    EXPECT_NEAR(rm.stretch_linf, r1.stretch_linf, 1e-3 * r1.stretch_linf);
+    EXPECT_NEAR(rm.per_chart[0].area, 1e8 * r1.per_chart[0].area, 1e-3 * 1e8 * r1.per_chart[0].area);
+  }
+}
+
 // A tight bound forces splits and is met; the result does not depend on the thread count.
 TEST(UvUnwrap, TightBoundSplitsAndResultIsThreadIndependent) {
   const double pi = std::acos(-1.0);
