@@ -55,7 +55,7 @@ fs::path OutputSet::add(const fs::path& final_path) {
                 final_path.filename().string());
   // Fail now, naming the user's path and the reason, if the folder takes no new file (a
   // read-only folder, /proc): later the writer would name the temporary file.
-  const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+  const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);  // a stale temporary of a dead run with this pid is replaced
   if (fd < 0) throw UsageError(final_path.string() + ": cannot write there: " + std::strerror(errno));
   ::close(fd);
   fs::remove(temp, ec);
