@@ -230,6 +230,47 @@ TEST(Cli, OutputsThatCannotBeWrittenAreUsageErrors) {
   EXPECT_FALSE(fs::exists(dir / "nodir"));
 }
 
+// An output naming an input (also spelled another way) is refused before any work and the
+// input is left as it was (streams cone IN -o IN had replaced the height map by its cones).
+TEST(Cli, AnOutputOverItsOwnInputIsRefused) {
+  test::TempDir dir;
+  write_mesh(test::make_grid(2, 2), dir / "grid.obj");
+  Image h(4, 4, 1, 0.25f);
+  write_image(h, dir / "h.exr", PixelFormat::float32);
+  const std::string grid = (dir / "grid.obj").string(), other_spelling = (dir / "." / "grid.obj").string();
+  const std::string height = (dir / "h.exr").string();
+  const auto grid_before = test::read_text(dir / "grid.obj");
+  const std::vector<std::string> cases = {
+      "meshreduce " + grid + " -o " + other_spelling + " --faces 4",
+      "meshreduce " + grid + " -o " + (dir / "r.obj").string() + " --faces 4 --progressive " + grid,
+      "uvpack pack " + grid + " -o " + grid + " --size 16",
+      "streams cone " + height + " -o " + height,
+      "streams sdf " + height + " -o " + (dir / "." / "h.exr").string(),
+  };
+  for (const std::string& args : cases) {
+    const Result r = run(args);
+    EXPECT_EQ(r.code, 2) << args << "\n" << r.err;
+    EXPECT_EQ(lines(r.err), 1u) << r.err;
+    EXPECT_NE(r.err.find("is also the input"), std::string::npos) << r.err;
+  }
+  EXPECT_EQ(test::read_text(dir / "grid.obj"), grid_before);
+  EXPECT_EQ(read_image(dir / "h.exr").pixels, h.pixels);
+  EXPECT_FALSE(fs::exists(dir / "r.obj"));
+}
+
+// Numbers beyond int are out of range, said as such (CLI11 had said "Could not convert", and
+// --size "is not N or WxH").
+TEST(Cli, HugeCountsAreOutOfRange) {
+  const Result threads = run("--threads 99999999999 streams cone h.exr -o c.exr");
+  EXPECT_EQ(threads.code, 2);
+  EXPECT_EQ(lines(threads.err), 1u) << threads.err;
+  EXPECT_EQ(threads.err.find("Could not convert"), std::string::npos) << threads.err;
+  EXPECT_NE(threads.err.find("--threads"), std::string::npos) << threads.err;
+  const Result size = run("bake --low a.obj --high b.obj -o d --size 99999999999");
+  EXPECT_EQ(size.code, 2);
+  EXPECT_NE(size.err.find("out of range"), std::string::npos) << size.err;
+}
+
 TEST(Cli, BadInputExitsThreeWithOneLineNamingTheFileAndNoOutput) {
   test::TempDir dir;
   test::write_text(dir / "garbage.obj", "\x7f\x45\x4c\x46 definitely not a mesh \x01\x02");
@@ -1432,6 +1473,16 @@ TEST(CliBake, CageLeansTheRaysAndBoundsTheirReach) {
   EXPECT_EQ(lines(bad.err), 1u) << bad.err;
   EXPECT_NE(bad.err.find("other.obj"), std::string::npos) << bad.err;
   EXPECT_FALSE(fs::exists(dir / "bad"));
+  EXPECT_EQ(near_report["cage_vertices_on_base"], 0);
+  EXPECT_EQ(near.err.find("lie on the base"), std::string::npos) << near.err;
+  // A cage equal to the base gives no direction: the rays go along the normal with --front,
+  // as without a cage, and the run says so (it was silent).
+  const Result flat = run(bake_args(dir, "low.obj", "near.obj", "flat", common + " --cage " + (dir / "low.obj").string()));
+  ASSERT_EQ(flat.code, 0) << flat.err;
+  const auto flat_report = nlohmann::json::parse(flat.out);
+  EXPECT_EQ(flat_report["cage_vertices_on_base"], base.n_vertices());
+  EXPECT_NE(flat.err.find("9 of 9 vertices lie on the base mesh's"), std::string::npos) << flat.err;
+  EXPECT_NEAR(flat_report["displacement_max"].get<double>(), 0.01, 1e-5) << "along the normal";
 }
 
 // --basis pn: a coarse sphere band (12 sides, radial normals in the file) over a fine one. The
@@ -1529,7 +1580,7 @@ TEST(CliBake, MatchByNameKeepsRaysOffTheNeighbouringPart) {
   const Result partial = run(bake_args(dir, "low.obj", "other.obj", "partial", common + " --match-by-name"));
   ASSERT_EQ(partial.code, 0) << partial.err;
   EXPECT_EQ(nlohmann::json::parse(partial.out)["unmatched_parts"], nlohmann::json::array({"Plate_LP.001"}));
-  EXPECT_NE(partial.err.find("no high part of the same name"), std::string::npos) << partial.err;
+  EXPECT_NE(partial.err.find("no high part of the same name (Plate_LP.001)"), std::string::npos) << partial.err;
   EXPECT_NEAR(read_image(dir / "partial" / "displacement.exr").at(6, 4), 0.01f, 1e-6f);
 }
 
@@ -1577,6 +1628,25 @@ TEST(CliPreview, CompareRefusesAMeshBeyondTheReferenceRange) {
   EXPECT_NE(wide.err.find("pixels per side"), std::string::npos) << wide.err;
   for (const char* option : {"--pan 1e20,0", "--zoom 1e39", "--azimuth 1e39", "--light-azimuth 1e39"})
     EXPECT_EQ(run("preview " + obj + " --maps " + (dir / "maps").string() + " --compare --method pom --size 8x8 " + option).code, 2) << option;
+}
+
+// A displacement map whose finite heights span more than a float (-3e38 to 3e38) cannot be
+// normalised: the streams refused it and so does the previewer, before any rendering.
+TEST(CliPreview, DisplacementBeyondTheFloatSpanIsRefused) {
+  test::TempDir d;
+  write_mesh(test::make_grid(2, 2), d / "base.obj");
+  fs::create_directories(d / "maps");
+  Image height(4, 4, 1, 0.0f), normals(4, 4, 3, 0.5f);
+  height.at(0, 0) = -3e38f;
+  height.at(3, 3) = 3e38f;
+  write_image(height, d / "maps" / "displacement.exr", PixelFormat::float32);
+  write_image(normals, d / "maps" / "normal_ts.png", PixelFormat::uint8);
+  const Result r = run("preview " + (d / "base.obj").string() + " --maps " + (d / "maps").string() + " --method pom --headless --png " +
+                       (d / "p.png").string() + " --size 8x8");
+  EXPECT_EQ(r.code, 3) << r.err;
+  EXPECT_EQ(lines(r.err), 1u) << r.err;
+  EXPECT_NE(r.err.find("displacement.exr: its heights span more than the float range"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(d / "p.png"));
 }
 
 TEST(CliPreview, WindowDrawsWhatHeadlessDraws) {

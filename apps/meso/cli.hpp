@@ -64,6 +64,15 @@ bool parse_finite(const std::string& text, float& value);
 // A path's extension in lower case, with its dot (".exr"; "" for none).
 std::string lower_extension(const std::string& path);
 
+// Throws UsageError when `output` names the same file as one of `inputs` (also through a
+// link or another spelling of the path): the run would replace its own input. Empty names
+// are skipped.
+void refuse_overwriting_input(const std::string& output, const std::vector<std::string>& inputs);
+
+// Six significant digits at any scale, for messages (std::to_string's fixed six decimals
+// print a distance of 1e-9 as 0.000000).
+std::string short_number(double v);
+
 }  // namespace meso::cli
 
 #include "meso/core/mesh.hpp"

@@ -161,6 +161,8 @@ void add_bake(CLI::App& app, Context& ctx) {
       parse_length(args->front, 1, "--front");
       parse_length(args->back, 1, "--back");
       parse_length(args->bunch, 1, "--bunch");
+      for (const std::string& name : wanted)
+        refuse_overwriting_input((std::filesystem::path(args->out_dir) / map_files().at(name)).string(), {args->low, args->high, args->cage, args->detail});
       nlohmann::json low_report, high_report;
       const Mesh low = load_mesh(ctx.globals, args->low, low_report);
       if (!has_uvs(low)) throw InputError(args->low, "has no texture coordinates; bake needs a UV-mapped base mesh");
@@ -213,8 +215,16 @@ void add_bake(CLI::App& app, Context& ctx) {
       }
       outputs.commit();
       if (r.misses) warn(ctx.globals, std::to_string(r.misses) + " of " + std::to_string(r.covered_texels) + " covered texels found no high surface within reach");
-      if (!r.unmatched_parts.empty())
-        warn(ctx.globals, std::to_string(r.unmatched_parts.size()) + " base parts have no high part of the same name (they see the whole high mesh)");
+      if (!r.unmatched_parts.empty()) {
+        // Named, the first few: the artist has to find them in the scene.
+        std::string names;
+        for (size_t i = 0; i < r.unmatched_parts.size() && i < 5; ++i) names += (i ? ", " : "") + r.unmatched_parts[i];
+        if (r.unmatched_parts.size() > 5) names += ", ...";
+        warn(ctx.globals, std::to_string(r.unmatched_parts.size()) + " base parts have no high part of the same name (" + names + "): they see the whole high mesh");
+      }
+      if (r.cage_vertices_on_base)
+        warn(ctx.globals, args->cage + ": " + std::to_string(r.cage_vertices_on_base) + " of " + std::to_string(low.n_vertices()) +
+                              " vertices lie on the base mesh's; rays there go along the normal with the default reach (" + short_number(r.front) + ")");
       if (r.ambiguous) warn(ctx.globals, std::to_string(r.ambiguous) + " texels had an ambiguous choice of hit (coverage value 0.75)");
       info(ctx.globals, "wrote " + std::to_string(wanted.size()) + " maps to " + dir.string());
       report = {{"command", "bake"},
@@ -230,6 +240,7 @@ void add_bake(CLI::App& app, Context& ctx) {
                 {"png_bits", args->png_bits},
                 {"normal_y", args->normal_y},
                 {"cage", args->cage},
+                {"cage_vertices_on_base", r.cage_vertices_on_base},
                 {"basis", args->basis},
                 {"detail", args->detail},
                 {"matched_parts", r.matched_parts},

@@ -43,6 +43,8 @@ void add_frames(CLI::App& app, Context& ctx) {
         parse_size(args->size, map_options.width, map_options.height);
         if (lower_extension(args->curvature_map) != ".exr") throw UsageError(args->curvature_map + ": the curvature map is a float EXR (use .exr)");
       }
+      refuse_overwriting_input(args->output, {args->input});
+      refuse_overwriting_input(args->curvature_map, {args->input});
       nlohmann::json in_report;
       Mesh mesh = load_mesh(ctx.globals, args->input, in_report);
       if (!has_uvs(mesh)) throw InputError(args->input, "has no texture coordinates; tangent frames need a UV mapping");

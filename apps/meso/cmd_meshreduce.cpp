@@ -39,14 +39,6 @@ ErrorTarget parse_error(const std::string& text, const char* option = "--error")
   return t;
 }
 
-// Six significant digits at any scale (std::to_string's fixed six decimals print a distance
-// of 1e-9 as 0.000000).
-std::string short_number(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
-
 // `measured`: the distance reduce_mesh already measured (--quality best), else measured here.
 void add_distance(nlohmann::json& report, Globals& g, const Mesh& input, const Mesh& out, double diagonal,
                   const std::optional<SurfaceDistance>& measured) {
@@ -90,9 +82,12 @@ void add_regions(nlohmann::json& report, Globals& g, const Mesh& input, const Me
                 std::to_string(regions[0].first_face) + " (see --json's regions)");
 }
 
+// Each name once, in order of first appearance (a file may name several groups alike).
 std::string joined(const std::vector<std::string>& names) {
   std::string s;
-  for (const auto& n : names) s += (s.empty() ? "" : ", ") + ("'" + n + "'");
+  for (size_t i = 0; i < names.size(); ++i)
+    if (std::find(names.begin(), names.begin() + static_cast<std::ptrdiff_t>(i), names[i]) == names.begin() + static_cast<std::ptrdiff_t>(i))
+      s += (s.empty() ? "" : ", ") + ("'" + names[i] + "'");
   return s;
 }
 
@@ -176,6 +171,7 @@ void add_meshreduce(CLI::App& app, Context& ctx) {
       ctx.run = [&ctx, args](nlohmann::json& report, Progress&) {
         if (!is_writable_mesh_extension(args->output))
           throw UsageError(args->output + ": unknown mesh extension (use .obj, .ply, .gltf or .glb)");
+        refuse_overwriting_input(args->output, {args->from_progressive});
         const auto t0 = std::chrono::steady_clock::now();
         const ProgressiveMesh pm = read_progressive(args->from_progressive);
         const size_t n = pm.input_faces();
@@ -217,6 +213,8 @@ void add_meshreduce(CLI::App& app, Context& ctx) {
       if (!is_writable_mesh_extension(args->output)) throw UsageError(args->output + ": unknown mesh extension (use .obj, .ply, .gltf or .glb)");
       if (!args->progressive.empty() && std::filesystem::path(args->progressive) == std::filesystem::path(args->output))
         throw UsageError(args->progressive + ": --progressive and -o name the same file");
+      refuse_overwriting_input(args->output, {args->input});
+      refuse_overwriting_input(args->progressive, {args->input});
       nlohmann::json in_report;
       const Mesh input = load_mesh(ctx.globals, args->input, in_report);
       const auto& names = group_names(input);

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -223,6 +224,12 @@ void add_preview(CLI::App& app, Context& ctx) {
       const std::filesystem::path dir(args->maps);
       PreviewMaps maps;
       maps.displacement = read_image(dir / "displacement.exr");
+      if (!maps.displacement.pixels.empty()) {
+        // Finite heights whose span is not (e.g. -3e38 and 3e38) cannot be normalised in
+        // float: the streams refuse such a map, and so does the previewer.
+        const auto [lo, hi] = std::minmax_element(maps.displacement.pixels.begin(), maps.displacement.pixels.end());
+        if (!std::isfinite(*hi - *lo)) throw InputError((dir / "displacement.exr").string(), "its heights span more than the float range; rescale the map");
+      }
       maps.normal_ts = read_image(dir / "normal_ts.png");
       if (maps.normal_ts.channels < 3) throw InputError((dir / "normal_ts.png").string(), "needs 3 channels (a tangent-space normal map)");
       // Streams: those the method needs must be there; in a window, any that are there are

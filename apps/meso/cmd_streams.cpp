@@ -47,6 +47,7 @@ CLI::App* add_stream_subcommand(CLI::App* streams, const std::string& name, cons
 }
 
 HeightField load_height_field(const StreamArgs& a) {
+  refuse_overwriting_input(a.output, {a.input});
   HeightField field = make_height_field(read_image(a.input), a.wrap ? Border::wrap : Border::clamp);
   // Finite heights whose span is not (e.g. -3e38 and 3e38) cannot be normalised in float.
   if (!std::isfinite(field.scale)) throw InputError(a.input, "its heights span more than the float range; rescale the map");
@@ -267,7 +268,7 @@ void add_streams(CLI::App& app, Context& ctx) {
       outputs.commit();
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       const size_t raw = table.distance.size() * sizeof(float);
-      info(ctx.globals, "wrote " + vdm_args->output + " (rank " + std::to_string(c.rank) + ", RMS error " + std::to_string(c.rms_error) + ")");
+      info(ctx.globals, "wrote " + vdm_args->output + " (rank " + std::to_string(c.rank) + ", RMS error " + short_number(c.rms_error) + ")");
       report = {{"command", "streams vdm"},
                 {"input", vdm_args->input},
                 {"output", vdm_args->output},
@@ -307,6 +308,7 @@ void add_streams(CLI::App& app, Context& ctx) {
   dstream->add_option("--back", ds->back, "Ray reach inward, object units (0: as --front)")->check(CLI::Range(0.0, 1e30) & Finite);
   dstream->callback([&ctx, ds] {
     ctx.run = [&ctx, ds](nlohmann::json& report, Progress& progress) {
+      refuse_overwriting_input(ds->output, {ds->low, ds->high});
       nlohmann::json low_report, high_report;
       const Mesh low = load_mesh(ctx.globals, ds->low, low_report);
       const Mesh high = load_mesh(ctx.globals, ds->high, high_report);

@@ -88,6 +88,8 @@ void add_uvpack(CLI::App& app, Context& ctx) {
       ->check(CLI::IsMember({"overlap", "shared", "flipped", "degenerate", "outside", "padding", "mip"}));
   check->callback([&ctx, args] {
     ctx.run = [&ctx, args](nlohmann::json& report, Progress&) {
+      refuse_overwriting_input(args->overlay, {args->input});
+      refuse_overwriting_input(args->report, {args->input});
       nlohmann::json in_report;
       const Mesh mesh = load_mesh(ctx.globals, args->input, in_report);
       if (!has_uvs(mesh)) throw InputError(args->input, "has no texture coordinates to check");
@@ -209,6 +211,7 @@ void add_uvpack(CLI::App& app, Context& ctx) {
   pack->callback([&ctx, pack_args] {
     ctx.run = [&ctx, pack_args](nlohmann::json& report, Progress&) {
       if (!is_writable_mesh_extension(pack_args->output)) throw UsageError("--output " + pack_args->output + ": unsupported mesh extension");
+      refuse_overwriting_input(pack_args->output, {pack_args->input});
       nlohmann::json in_report;
       Mesh mesh = load_mesh(ctx.globals, pack_args->input, in_report);
       nlohmann::json unwrap_report;

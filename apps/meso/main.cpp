@@ -74,6 +74,23 @@ std::string lower_extension(const std::string& path) {
   return ext;
 }
 
+void refuse_overwriting_input(const std::string& output, const std::vector<std::string>& inputs) {
+  if (output.empty()) return;
+  const std::filesystem::path out(output);
+  for (const std::string& input : inputs) {
+    if (input.empty()) continue;
+    std::error_code ec;  // either missing: not the same file (equivalent() is false)
+    if (std::filesystem::equivalent(out, input, ec))
+      throw UsageError(output + ": is also the input " + input + "; write the output under another name");
+  }
+}
+
+std::string short_number(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
 bool parse_finite(const std::string& text, float& value) {
   size_t used = 0;
   try {
@@ -97,6 +114,8 @@ void parse_size(const std::string& text, int& width, int& height) {
       height = std::stoi(text.substr(x + 1), &used);
       if (used != text.size() - x - 1) throw std::invalid_argument(text);
     }
+  } catch (const std::out_of_range&) {  // digits beyond int: out of range, not malformed
+    throw UsageError("size '" + text + "' is out of range (1 to 32768 per side)");
   } catch (const std::logic_error&) {
     throw UsageError("size '" + text + "' is not N or WxH");
   }
@@ -127,7 +146,8 @@ int main(int argc, char** argv) {
   app.failure_message([](const CLI::App*, const CLI::Error& e) { return std::string("meso: error: ") + e.what() + " (see --help)\n"; });
   app.option_defaults()->always_capture_default();  // --help shows every default
   app.add_option("--threads", globals.threads, "Worker threads (0 = all cores); outputs do not depend on it")
-      ->check(cli::NonNegative);
+      ->check(cli::NonNegative)
+      ->check(CLI::Range(0, 65536));  // beyond int, CLI11 said only "Could not convert"
   app.add_flag("--quiet", globals.quiet, "No progress bar, information or warnings (errors still print)");
   app.add_flag("--json", globals.json, "Print a machine-readable JSON report of what was done on stdout");
   cli::add_meshreduce(app, ctx);

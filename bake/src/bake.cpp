@@ -164,6 +164,9 @@ BakeResult bake_at_scale(const Mesh& low, const Mesh& high, const BakeOptions& o
   // Ray start offset: far below the scale of any detail, far above float rounding of
   // coordinates relative to the base's centre.
   const float eps = 1e-5f * std::max(high_box.diagonal(), bounding_box(low).diagonal());
+  if (o.cage)
+    for (auto v : low.vertices())
+      if (!((o.cage->point(VertexHandle(v.idx())) - low.point(v)).norm() > eps)) ++r.cage_vertices_on_base;
   // Work relative to the base's centre (see RayScene).
   const Vec3f center = bounding_box(low).center();
   const Eigen::Vector3d origin(center[0], center[1], center[2]);

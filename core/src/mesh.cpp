@@ -122,6 +122,13 @@ float uv_double_area(const Mesh& mesh, FaceHandle f) {
   return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
 }
 
+double face_area(const Mesh& mesh, FaceHandle f) {
+  const auto hs = face_halfedges(mesh, f);
+  OpenMesh::Vec3d p[3];
+  for (int i = 0; i < 3; ++i) p[i] = OpenMesh::vector_cast<OpenMesh::Vec3d>(mesh.point(mesh.to_vertex_handle(hs[i])));
+  return 0.5 * OpenMesh::cross(p[1] - p[0], p[2] - p[0]).norm();
+}
+
 std::vector<int> uv_charts(const Mesh& mesh, size_t* count) {
   std::vector<int> parent(mesh.n_faces());
   std::iota(parent.begin(), parent.end(), 0);
@@ -152,10 +159,7 @@ std::vector<int> uv_charts(const Mesh& mesh, size_t* count) {
 double object_length_per_uv(const Mesh& mesh) {
   double area3 = 0, area_uv = 0;
   for (auto f : mesh.faces()) {
-    const auto hs = face_halfedges(mesh, f);
-    const Vec3f a = mesh.point(mesh.to_vertex_handle(hs[0])), b = mesh.point(mesh.to_vertex_handle(hs[1])),
-                c = mesh.point(mesh.to_vertex_handle(hs[2]));
-    area3 += 0.5 * static_cast<double>(((b - a) % (c - a)).norm());
+    area3 += face_area(mesh, f);
     area_uv += 0.5 * std::abs(static_cast<double>(uv_double_area(mesh, f)));
   }
   return area3 > 0 && area_uv > 0 ? std::sqrt(area3 / area_uv) : 0.0;

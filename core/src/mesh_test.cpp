@@ -18,5 +18,17 @@ TEST(Mesh, ObjectLengthPerUvIsTheMeanScale) {
   EXPECT_EQ(object_length_per_uv(flat), 0.0);
 }
 
+// Areas in double: a sheet 1e12 or 1e-12 units across has the same scale per unit, where a
+// float cross product gave inf (1e12) and 0 (1e-12, "has no area").
+TEST(Mesh, AreasHoldAtAnyScaleAFloatCanHold) {
+  for (const float s : {1e12f, 1e-12f, 1e30f, 1e-30f}) {
+    const Mesh m = test::make_grid(4, 3, 3.0f * s, 2.0f * s);
+    EXPECT_NEAR(object_length_per_uv(m) / s, std::sqrt(6.0), 1e-5) << s;
+    double area = 0;
+    for (auto f : m.faces()) area += face_area(m, f);
+    EXPECT_NEAR(area / (static_cast<double>(s) * s), 6.0, 1e-5) << s;
+  }
+}
+
 }  // namespace
 }  // namespace meso

@@ -170,19 +170,34 @@ size_t check_obj_texcoords(const std::string& text, const std::string& name) {
 }
 
 // assimp's ASCII PLY reader, given fewer elements than the header announces, makes up the
-// missing ones (a face short of the count comes back as a copy of the last): the file is
-// cut short and is refused. The body is walked token by token, as the header's elements and
-// properties lay it out (a list property: its count, then that many values).
-void check_ascii_ply(const std::string& text, const std::string& name) {
+// missing ones (a face short of the count comes back as a copy of the last), and its binary
+// reader allocates what the header announces before reading (4e9 vertices: bad_alloc): the
+// file is cut short and is refused. The body is walked as the header's elements and
+// properties lay it out (a list property: its count, then that many values): token by token
+// in ASCII; in binary, elements without lists in one step, lists by their counts.
+void check_ply(const std::string& text, const std::string& name) {
   const size_t header_end = text.find("end_header");
   if (text.compare(0, 3, "ply") != 0 || header_end == std::string::npos) return;  // assimp says what is wrong
+  struct Property {
+    bool list = false;
+    size_t size = 0;       // bytes of the value, or of a list's count (0: a type assimp will refuse)
+    size_t item_size = 0;  // bytes of each list item
+  };
   struct Element {
     std::string name;
     long long count = 0;
-    std::vector<bool> lists;  // per property: a list?
+    std::vector<Property> properties;
+  };
+  // Bytes of a PLY scalar type.
+  const auto type_size = [](const std::string& t) -> size_t {
+    if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
+    if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
+    if (t == "int" || t == "uint" || t == "int32" || t == "uint32" || t == "float" || t == "float32") return 4;
+    if (t == "double" || t == "float64") return 8;
+    return 0;
   };
   std::vector<Element> elements;
-  bool ascii = false;
+  std::string format;
   size_t pos = 0;
   while (pos < header_end) {
     size_t eol = text.find('\n', pos);
@@ -192,19 +207,69 @@ void check_ascii_ply(const std::string& text, const std::string& name) {
     std::string word;
     line >> word;
     if (word == "format") {
-      line >> word;
-      ascii = word == "ascii";
+      line >> format;
     } else if (word == "element") {
       Element e;
       line >> e.name >> e.count;
       elements.push_back(e);
     } else if (word == "property" && !elements.empty()) {
+      Property p;
       line >> word;
-      elements.back().lists.push_back(word == "list");
+      p.list = word == "list";
+      if (p.list) {
+        line >> word;
+        p.size = type_size(word);
+        line >> word;
+        p.item_size = type_size(word);
+      } else {
+        p.size = type_size(word);
+      }
+      elements.back().properties.push_back(p);
     }
   }
-  if (!ascii) return;
   const size_t body = text.find('\n', header_end);
+  const auto cut_short = [&](const Element& e, long long i) {
+    return InputError(name, "cut short: it ends inside " + e.name + " " + std::to_string(i) + " of the " + std::to_string(e.count) +
+                                " its header announces");
+  };
+  if (format == "binary_little_endian" || format == "binary_big_endian") {
+    const bool big = format == "binary_big_endian";
+    const size_t size = text.size();
+    size_t at = body == std::string::npos ? size : body + 1;
+    for (const Element& e : elements) {
+      size_t fixed = 0;
+      bool lists = false;
+      for (const Property& p : e.properties) {
+        if (p.size == 0 || (p.list && p.item_size == 0)) return;  // an unknown type: assimp says what is wrong
+        lists |= p.list;
+        fixed += p.size;
+      }
+      if (!lists) {
+        // count * fixed may pass 2^64: compared by division.
+        if (e.count > 0 && fixed > 0 && static_cast<unsigned long long>(e.count) > (size - at) / fixed)
+          throw cut_short(e, static_cast<long long>((size - at) / fixed));
+        at += static_cast<size_t>(std::max(0LL, e.count)) * fixed;
+        continue;
+      }
+      for (long long i = 0; i < e.count; ++i)
+        for (const Property& p : e.properties) {
+          if (p.size > size - at) throw cut_short(e, i);
+          size_t n = 1;
+          if (p.list) {
+            // The list's count, as an unsigned number of p.size bytes in the file's byte order.
+            n = 0;
+            for (size_t k = 0; k < p.size; ++k) n = (n << 8) | static_cast<unsigned char>(text[at + (big ? k : p.size - 1 - k)]);
+            at += p.size;
+            if (n > (size - at) / p.item_size) throw cut_short(e, i);
+            at += n * p.item_size;
+          } else {
+            at += p.size;
+          }
+        }
+    }
+    return;
+  }
+  if (format != "ascii") return;
   const char* end = text.data() + text.size();
   const char* p = body == std::string::npos ? end : text.data() + body + 1;
   // The next token, or false at the end of the file.
@@ -216,8 +281,9 @@ void check_ascii_ply(const std::string& text, const std::string& name) {
     return p > t;
   };
   for (const Element& e : elements)
-    for (long long i = 0; i < e.count && !e.lists.empty(); ++i)  // an element without properties takes no tokens
-      for (const bool list : e.lists) {
+    for (long long i = 0; i < e.count && !e.properties.empty(); ++i)  // an element without properties takes no tokens
+      for (const Property& property : e.properties) {
+        const bool list = property.list;
         std::string_view token;
         long long n = 1;
         bool ok = next(token);
@@ -226,9 +292,7 @@ void check_ascii_ply(const std::string& text, const std::string& name) {
           ok = ec == std::errc() && ptr == token.data() + token.size() && n >= 0;
         }
         for (long long k = 0; ok && k < (list ? n : 0); ++k) ok = next(token);
-        if (!ok)
-          throw InputError(name, "cut short: it ends inside " + e.name + " " + std::to_string(i) + " of the " + std::to_string(e.count) +
-                                     " its header announces");
+        if (!ok) throw cut_short(e, i);
       }
 }
 
@@ -324,7 +388,7 @@ Mesh read_mesh(const fs::path& path, MeshReadReport* report) {
   const bool obj = lower_ext(path) == ".obj";
   const std::string obj_text = obj ? file_text(path, name) : std::string();
   const size_t obj_untextured = obj ? check_obj_texcoords(obj_text, name) : 0;
-  if (lower_ext(path) == ".ply") check_ascii_ply(file_text(path, name), name);
+  if (lower_ext(path) == ".ply") check_ply(file_text(path, name), name);
   // A UTF-8 byte-order mark (some Windows tools write one) hides the OBJ's first line from
   // assimp, which then reports an index out of range: such a file is read from memory, past
   // the mark (its material library, which meso does not use, is then not looked for).

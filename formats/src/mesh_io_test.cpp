@@ -258,6 +258,34 @@ TEST(MeshIo, AsciiPlyShortOfItsHeaderIsRefused) {
   EXPECT_EQ(read_mesh(dir / "junk.ply").n_faces(), 3u);
 }
 
+// A binary PLY whose header announces more than its body can hold: assimp allocated the
+// announced 4e9 vertices first (std::bad_alloc); it is cut short, and says so. A binary PLY
+// meso wrote still reads.
+TEST(MeshIo, BinaryPlyShortOfItsHeaderIsRefused) {
+  test::TempDir dir;
+  const std::string header = "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\nproperty float x\nproperty float y\n"
+                             "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  test::write_text(dir / "huge.ply", header + std::string(12, '\0'));
+  try {
+    read_mesh(dir / "huge.ply");
+    ADD_FAILURE() << "a PLY announcing 4e9 vertices in 12 bytes must be refused";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("huge.ply: cut short: it ends inside vertex 1 of the 4000000000 its header announces"), std::string::npos) << e.what();
+  }
+  write_mesh(test::make_grid(2, 2), dir / "grid.ply");
+  EXPECT_EQ(read_mesh(dir / "grid.ply").n_faces(), 8u);
+  // The same file without its last face's bytes.
+  std::string cut = test::read_text(dir / "grid.ply");
+  cut.resize(cut.size() - 13);
+  test::write_text(dir / "cut.ply", cut);
+  try {
+    read_mesh(dir / "cut.ply");
+    ADD_FAILURE() << "a binary PLY short of its last face must be refused";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("cut.ply: cut short: it ends inside face 7 of the 8"), std::string::npos) << e.what();
+  }
+}
+
 // Files assimp reads by repairing them, saying so only in its log: a glTF face indexing past
 // the vertices (dropped) and an OFF face doing so (pointed elsewhere) are refused; an OFF with
 // fewer faces than its header says is named as such.

@@ -38,7 +38,7 @@ std::vector<ErrorRegion> error_regions(const Mesh& b, const std::vector<double>&
       r.max_distance = std::max(r.max_distance, face_distance[fi]);
       const auto hs = face_halfedges(b, f);
       const Vec3f p0 = b.point(b.to_vertex_handle(hs[0])), p1 = b.point(b.to_vertex_handle(hs[1])), p2 = b.point(b.to_vertex_handle(hs[2]));
-      const double area = 0.5 * static_cast<double>((p1 - p0).cross(p2 - p0).norm());
+      const double area = face_area(b, f);
       const Vec3f c = (p0 + p1 + p2) / 3.0f;
       r.area += area;
       cx += area * c[0];

@@ -214,7 +214,9 @@ std::vector<float> vdm_curvature_slices(const std::vector<float>& k1, const std:
     return static_cast<double>(v[k]);
   };
   const double lo = std::min(0.0, percentile(k2, 0.05)), hi = std::max(0.0, percentile(k1, 0.95));
-  if (steps <= 1 || hi - lo <= 1e-9) {
+  // The range is judged per unit of u, as the slices are stored: in 1 / object units a
+  // mesh 1e12 units across has a range of ~1e-12 and would have been taken as flat.
+  if (steps <= 1 || (hi - lo) * length_per_u <= 1e-9) {
     std::vector<float> mean(k1.size());
     for (size_t i = 0; i < k1.size(); ++i) mean[i] = 0.5f * (k1[i] + k2[std::min(i, k2.size() - 1)]);
     return {static_cast<float>(percentile(mean, 0.5) * length_per_u)};

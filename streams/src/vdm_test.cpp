@@ -157,5 +157,18 @@ TEST(Vdm, CurvatureSlicesIgnoreAFewSharpVertices) {
   EXPECT_FLOAT_EQ(one[0], 0.5f);  // the median mean curvature 0.25, times 2
 }
 
+// The same mesh at 1e12 units: curvatures 1e-12 as large, length per u 1e12 larger; the
+// slices per unit of u are the same (they had collapsed to one, the range taken as flat).
+TEST(Vdm, CurvatureSlicesDoNotDependOnTheUnits) {
+  for (const double scale : {1e12, 1e-12}) {
+    std::vector<float> k1(100, static_cast<float>(0.5 / scale)), k2(100, 0.0f);
+    const std::vector<float> s = vdm_curvature_slices(k1, k2, 2.0 * scale, 3);
+    ASSERT_EQ(s.size(), 3u) << scale;
+    EXPECT_FLOAT_EQ(s[0], 0.0f);
+    EXPECT_NEAR(s[1], 0.5f, 1e-6f);
+    EXPECT_NEAR(s[2], 1.0f, 1e-6f);
+  }
+}
+
 }  // namespace
 }  // namespace meso

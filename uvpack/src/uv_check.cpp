@@ -152,10 +152,7 @@ UvCheckReport check_uv_mapping(const Mesh& mesh, const UvCheckOptions& o) {
     const double a = uv_double_area(mesh, f);
     signed_area[c] += a;
     uv_area[c] += std::abs(a) * 0.5 * o.size * o.size;
-    const auto hs = face_halfedges(mesh, f);
-    const Vec3f p0 = mesh.point(mesh.to_vertex_handle(hs[0])), p1 = mesh.point(mesh.to_vertex_handle(hs[1])),
-                p2 = mesh.point(mesh.to_vertex_handle(hs[2]));
-    surface_area[c] += 0.5 * static_cast<double>(OpenMesh::cross(p1 - p0, p2 - p0).norm());
+    surface_area[c] += face_area(mesh, f);
   }
   for (auto f : mesh.faces()) {
     const double a = uv_double_area(mesh, f);

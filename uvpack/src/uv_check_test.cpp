@@ -158,6 +158,19 @@ TEST(UvCheck, TexelDensityIsTexelsPerObjectUnit) {
   EXPECT_TRUE(r.flipped_faces.empty());
 }
 
+// The same sheet at 1e12 and 1e-12 units: the density scales as 1/units (it was 0 at 1e12,
+// and absent at 1e-12, the surface area having underflowed in float).
+TEST(UvCheck, TexelDensityAtAnyScale) {
+  for (const float s : {1e12f, 1e-12f}) {
+    const Mesh m = test::make_grid(3, 1, 3.0f * s, 1.0f * s);
+    UvCheckOptions o;
+    o.size = 300;
+    const UvCheckReport r = check_uv_mapping(m, o);
+    ASSERT_EQ(r.texel_density.size(), 1u) << s;
+    EXPECT_NEAR(r.texel_density[0].texels_per_unit * s, std::sqrt(300.0 * 300.0 / 3.0), 1e-4) << s;
+  }
+}
+
 TEST(UvCheck, ReportsDegenerateAndOutsideFaces) {
   Mesh m = test::make_grid(2, 1);
   for (auto h : face_halfedges(m, FaceHandle(1))) m.set_texcoord2D(h, Vec2f(0.2f, 0.2f));

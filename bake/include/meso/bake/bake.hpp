@@ -113,6 +113,11 @@ struct BakeResult {
   // artist's report.
   std::vector<uint32_t> face_texels, face_misses, face_ambiguous;
   std::vector<std::string> matched_parts, unmatched_parts;  // base part names (match_by_name)
+  // With a cage: its vertices lying on their base vertex (closer than the ray offset, 1e-5 of
+  // the larger diagonal). A sample where the cage point meets the base point has no
+  // direction toward the cage and is cast along the normal with `front` instead, so a cage
+  // equal to the base is the same as no cage (the caller should say so).
+  size_t cage_vertices_on_base = 0;
   float front = 0, back = 0;  // the reach actually used
   float bunch = 0;            // the bunch distance actually used
   int samples = 1;            // samples per texel actually used (a square)

@@ -103,6 +103,11 @@ inline OpenMesh::Vec3d any_perpendicular(const OpenMesh::Vec3d& n) {
 // The UV-space signed double area of a face (positive for counter-clockwise UVs).
 float uv_double_area(const Mesh& mesh, FaceHandle f);
 
+// The surface area of a face in object units squared, computed in double: a float cross
+// product overflows for edges past ~1e19 and its squared norm for edges past ~1e9, and
+// underflows to 0 below ~1e-19 (a mesh 1e12 units across had area inf, one 1e-12 across 0).
+double face_area(const Mesh& mesh, FaceHandle f);
+
 // Object length per unit of UV: sqrt(surface area / UV area) over all faces (a mapping's
 // mean scale); 0 when either area is 0.
 double object_length_per_uv(const Mesh& mesh);
