@@ -1649,6 +1649,36 @@ TEST(CliPreview, DisplacementBeyondTheFloatSpanIsRefused) {
   EXPECT_FALSE(fs::exists(d / "p.png"));
 }
 
+// --shade height: object units in an EXR; in an 8-bit PNG normalised to the map's range with
+// the mapping in its metadata (the raw heights, all below 1/255 unit, had come out black).
+TEST(CliPreview, HeightShadeIsReadableInEveryFormat) {
+  test::TempDir d;
+  write_mesh(test::make_grid(2, 2), d / "base.obj");
+  fs::create_directories(d / "maps");
+  Image height(8, 8, 1), normals(8, 8, 3, 0.5f);
+  for (int y = 0; y < 8; ++y)
+    for (int x = 0; x < 8; ++x) height.at(x, y) = 0.004f * static_cast<float>(x);  // 0 to 0.028
+  write_image(height, d / "maps" / "displacement.exr", PixelFormat::float32);
+  write_image(normals, d / "maps" / "normal_ts.png", PixelFormat::uint8);
+  const std::string scene = "preview " + (d / "base.obj").string() + " --maps " + (d / "maps").string() +
+                            " --method pom --headless --size 32x32 --view-angle 0 --shade height --png ";
+  ASSERT_EQ(run(scene + (d / "h.exr").string()).code, 0);
+  ASSERT_EQ(run(scene + (d / "h.png").string()).code, 0);
+  const Image exr = read_image(d / "h.exr"), png = read_image(d / "h.png");
+  float exr_max = 0, png_max = 0;
+  for (size_t i = 0; i < exr.pixels.size(); i += 4) {
+    if (exr.pixels[i + 3] == 0) continue;
+    EXPECT_GE(exr.pixels[i], -1e-6f);
+    EXPECT_LE(exr.pixels[i], 0.028f + 1e-6f);
+    exr_max = std::max(exr_max, exr.pixels[i]);
+  }
+  for (size_t i = 0; i < png.pixels.size(); i += 4) png_max = std::max(png_max, png.pixels[i]);
+  EXPECT_GT(exr_max, 0.02f) << "object units";
+  EXPECT_GT(png_max, 0.7f) << "normalised to the map's range";
+  EXPECT_NEAR(std::stod(std::get<std::string>(png.metadata.at("height_scale"))), 0.028, 1e-6);
+  EXPECT_NEAR(std::stod(std::get<std::string>(png.metadata.at("height_bias"))), 0.0, 1e-9);
+}
+
 TEST(CliPreview, WindowDrawsWhatHeadlessDraws) {
   if (std::system("command -v xvfb-run >/dev/null 2>&1") != 0) {
     if (const char* required = std::getenv("MESO_REQUIRE_PEERS"); required && std::string(required) == "1")

@@ -30,6 +30,30 @@ struct Args {
   size_t reference_triangles = size_t(1) << 25;
 };
 
+// A rendered frame as the user's file takes it. EXR keeps the float values (UVs and heights
+// exactly). PNG and TIFF are 8 bit: a height frame (R in object units) is normalised there to
+// the displacement map's range, object = meso:height_bias + meso:height_scale * R, as bake's
+// displacement.png (raw, every height below 1/255 unit came out black).
+void write_frame(Image frame, const std::filesystem::path& temp, PreviewShade shade, const Image& displacement) {
+  if (lower_extension(temp.string()) == ".exr") {
+    write_image(frame, temp, PixelFormat::float32);
+    return;
+  }
+  if (shade == PreviewShade::height && !displacement.pixels.empty()) {
+    const auto [lo, hi] = std::minmax_element(displacement.pixels.begin(), displacement.pixels.end());
+    const float bias = *lo, scale = *hi - *lo;
+    const size_t step = static_cast<size_t>(frame.channels);
+    for (size_t i = 0; i < frame.pixels.size(); i += step) {
+      const bool background = step == 4 && frame.pixels[i + 3] == 0.0f;  // stays transparent black
+      frame.pixels[i] = scale > 0 && !background ? std::clamp((frame.pixels[i] - bias) / scale, 0.0f, 1.0f) : 0.0f;
+    }
+    frame.metadata["height_bias"] = bias;
+    frame.metadata["height_scale"] = scale;
+    frame.metadata["height_units"] = std::string("object = bias + scale * R");
+  }
+  write_image(frame, temp, PixelFormat::uint8);
+}
+
 // --compare: the reference, every method against it, the heatmaps, the report (and a table on
 // stdout without --json).
 void compare(Context& ctx, const Args& args, const Mesh& base, const PreviewMaps& maps, const PreviewOptions& view,
@@ -58,7 +82,7 @@ void compare(Context& ctx, const Args& args, const Mesh& base, const PreviewMaps
     }
   }
   if (!args.png.empty()) {
-    write_image(c.reference_view, outputs.add(args.png), PixelFormat::uint8);
+    write_frame(c.reference_view, outputs.add(args.png), view.shade, maps.displacement);
     written.push_back(args.png);
   }
   outputs.commit();
@@ -94,7 +118,8 @@ void add_preview(CLI::App& app, Context& ctx) {
   sub->add_flag("--list-methods", args->list, "Print the method names, one per line, and exit");
   sub->add_flag("--headless", args->headless, "Render off screen (EGL, no display needed) to --png");
   sub->add_option("--png", args->png,
-                  "Output image for --headless (RGBA PNG, 8 bit); with --compare, the reference image (in --shade); in the window "
+                  "Output image for --headless (RGBA, 8 bit in .png/.tif, float in .exr; --shade height in 8 bit is normalised to "
+                  "the map's range); with --compare, the reference image (in --shade); in the window "
                   "with --frames, its last frame")
       ->check(ImageOutput);
   sub->add_option("--frames", args->frames, "Window: close after N frames (scripted runs; the report gives the median frame time)")
@@ -264,7 +289,7 @@ void add_preview(CLI::App& app, Context& ctx) {
         report = {{"command", "preview"}, {"method", o.method}, {"frames", run.frames}, {"median_frame_ms", run.median_ms}};
         if (!args->png.empty() && !run.last_frame.empty()) {
           OutputSet outputs;
-          write_image(run.last_frame, outputs.add(args->png), PixelFormat::uint8);
+          write_frame(run.last_frame, outputs.add(args->png), o.shade, maps.displacement);
           outputs.commit();
           report["png"] = args->png;
         }
@@ -283,7 +308,7 @@ void add_preview(CLI::App& app, Context& ctx) {
           char suffix[16];
           std::snprintf(suffix, sizeof suffix, "_%03d", k);
           const std::filesystem::path file = png.parent_path() / (png.stem().string() + suffix + png.extension().string());
-          write_image(preview.render(f), outputs.add(file), PixelFormat::uint8);
+          write_frame(preview.render(f), outputs.add(file), o.shade, maps.displacement);
           frames.push_back(file.string());
         }
         const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -297,7 +322,7 @@ void add_preview(CLI::App& app, Context& ctx) {
       Image img = render_headless(base, maps, o);
       const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
       OutputSet outputs;
-      write_image(img, outputs.add(args->png), PixelFormat::uint8);
+      write_frame(img, outputs.add(args->png), o.shade, maps.displacement);
       outputs.commit();
       info(ctx.globals, "wrote " + args->png);
       report = {{"command", "preview"}, {"base", base_report}, {"method", o.method}, {"iterations", o.iterations},
