@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -269,6 +270,17 @@ TEST(Cli, HugeCountsAreOutOfRange) {
   const Result size = run("bake --low a.obj --high b.obj -o d --size 99999999999");
   EXPECT_EQ(size.code, 2);
   EXPECT_NE(size.err.find("out of range"), std::string::npos) << size.err;
+}
+
+// A bake whose maps cannot fit in this machine's memory is refused before any work (32768^2,
+// about 53 GB, had run a 24 GB machine out of memory).
+TEST(Cli, BakeBeyondTheMachinesMemoryIsRefused) {
+  const double physical = static_cast<double>(::sysconf(_SC_PHYS_PAGES)) * static_cast<double>(::sysconf(_SC_PAGE_SIZE));
+  if (physical > 50e9) GTEST_SKIP() << "this machine could hold a 32768^2 bake";
+  const Result r = run("bake --low a.obj --high b.obj -o d --size 32768");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_EQ(lines(r.err), 1u) << r.err;
+  EXPECT_NE(r.err.find("bake --size 32768 needs about 52.6 GB of memory"), std::string::npos) << r.err;
 }
 
 TEST(Cli, BadInputExitsThreeWithOneLineNamingTheFileAndNoOutput) {

@@ -69,6 +69,11 @@ std::string lower_extension(const std::string& path);
 // are skipped.
 void refuse_overwriting_input(const std::string& output, const std::vector<std::string>& inputs);
 
+// Throws UsageError when `bytes` (an estimate of what a run will hold at once) exceeds this
+// machine's physical memory, saying `what` needs it: refused before the work instead of
+// swapping for minutes or being killed by the kernel.
+void refuse_beyond_memory(const std::string& what, double bytes);
+
 // Six significant digits at any scale, for messages (std::to_string's fixed six decimals
 // print a distance of 1e-9 as 0.000000).
 std::string short_number(double v);

@@ -127,6 +127,10 @@ void add_bake(CLI::App& app, Context& ctx) {
     ctx.run = [&ctx, args](nlohmann::json& report, Progress& progress) {
       BakeOptions o;
       parse_size(args->size, o.width, o.height);
+      // Measured: 4096^2 took 616 MB more than 2048^2 (49 bytes per texel: the maps, the
+      // coverage, the per-texel sources of the dilation), whatever --maps writes. A 32768^2
+      // bake (53 GB) had run this 24 GB machine out of memory.
+      refuse_beyond_memory("bake --size " + args->size, 49.0 * o.width * o.height);
       o.dilate = parse_dilate(args->dilate);
       // Samples sit at the centres of n x n sub-texels: any other count would be rounded to
       // a square the user did not ask for (2 used to become 1), so it is refused.

@@ -41,6 +41,8 @@ void add_frames(CLI::App& app, Context& ctx) {
       const bool want_map = !args->curvature_map.empty();
       if (want_map) {
         parse_size(args->size, map_options.width, map_options.height);
+        // Measured: 4096^2 took 204 MB more than 2048^2 (16 bytes per texel).
+        refuse_beyond_memory("frames --curvature-map at --size " + args->size, 16.0 * map_options.width * map_options.height);
         if (lower_extension(args->curvature_map) != ".exr") throw UsageError(args->curvature_map + ": the curvature map is a float EXR (use .exr)");
       }
       refuse_overwriting_input(args->output, {args->input});

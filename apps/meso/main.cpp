@@ -85,6 +85,15 @@ void refuse_overwriting_input(const std::string& output, const std::vector<std::
   }
 }
 
+void refuse_beyond_memory(const std::string& what, double bytes) {
+  const double physical = static_cast<double>(::sysconf(_SC_PHYS_PAGES)) * static_cast<double>(::sysconf(_SC_PAGE_SIZE));
+  if (physical > 0 && bytes > physical) {
+    char text[160];
+    std::snprintf(text, sizeof text, " needs about %.1f GB of memory, more than this machine's %.1f GB", bytes / 1e9, physical / 1e9);
+    throw UsageError(what + text);
+  }
+}
+
 std::string short_number(double v) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.6g", v);
