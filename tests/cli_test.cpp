@@ -658,6 +658,22 @@ TEST_F(Skeleton, WholePipeline) {
   const auto given_report = nlohmann::json::parse(given.out);
   EXPECT_EQ(given_report["curvatures"], nlohmann::json::array({0.0}));
   EXPECT_EQ(given_report["relief"], vdm_report["relief"]);
+  EXPECT_EQ(given.err.find("raised to 1e-6"), std::string::npos) << given.err;
+  // The same mesh at 10^12 times its size: curvature slices and length per u scale with it
+  // (they were -inf and null from float areas), and the map's relief, now below 1e-6 of a
+  // unit of u, is raised with a warning (it was silent).
+  Mesh huge = read_mesh(d / "reduced.obj");
+  for (auto v : huge.vertices()) huge.set_point(v, huge.point(v) * 1e12f);
+  write_mesh(huge, d / "huge.obj");
+  const Result scaled = run("streams vdm " + (d / "maps" / "displacement.exr").string() + " -o " + (d / "vh.exr").string() +
+                            " --theta 3 --phi 4 --mesh " + (d / "huge.obj").string() + " --curvature-steps 2 --max-rank 6 --json");
+  ASSERT_EQ(scaled.code, 0) << scaled.err;
+  const auto scaled_report = nlohmann::json::parse(scaled.out);
+  ASSERT_EQ(scaled_report["curvatures"].size(), vdm_report["curvatures"].size());
+  for (size_t i = 0; i < scaled_report["curvatures"].size(); ++i)
+    EXPECT_NEAR(scaled_report["curvatures"][i].get<double>(), vdm_report["curvatures"][i].get<double>(), 1e-3) << i;
+  EXPECT_NEAR(scaled_report["mesh"]["object_length_per_u"].get<double>() / vdm_report["mesh"]["object_length_per_u"].get<double>(), 1e12, 1e6);
+  EXPECT_NE(scaled.err.find("raised to 1e-6"), std::string::npos) << scaled.err;
 
   // Compressed displacement vertex streams: the file's size is the documented layout.
   const Result dstream = run("streams dstream --low " + (d / "reduced.obj").string() + " --high " + (d / "high.obj").string() + " -o " +

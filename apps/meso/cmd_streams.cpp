@@ -245,7 +245,14 @@ void add_streams(CLI::App& app, Context& ctx) {
           hi = std::max(hi, static_cast<double>(v.k1));
         }
         if (vdm->curvatures.empty()) o.curvatures = vdm_curvature_slices(k1, k2, per_u, vdm->curvature_steps);
-        if (!vdm->relief_given) o.relief = static_cast<float>(std::max(1e-6, field.scale / per_u));
+        if (!vdm->relief_given) {
+          o.relief = static_cast<float>(std::max(1e-6, field.scale / per_u));
+          // A height range below 1e-6 of the mesh's length per u is flat for any table: the
+          // map and the mesh are likely of different assets or units.
+          if (field.scale > 0 && field.scale / per_u < 1e-6)
+            warn(ctx.globals, vdm->mesh + ": the map's height range is " + short_number(field.scale / per_u) +
+                                  " units of u on this mesh, raised to 1e-6 (are the map and the mesh in the same units?)");
+        }
         mesh_report["object_length_per_u"] = per_u;
         mesh_report["curvature_range"] = {lo, hi};
         mesh_report["curvatures_per_u"] = o.curvatures;
