@@ -1675,6 +1675,11 @@ TEST(CliPreview, DisplacementBeyondTheFloatSpanIsRefused) {
   EXPECT_EQ(lines(r.err), 1u) << r.err;
   EXPECT_NE(r.err.find("displacement.exr: its heights span more than the float range"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(d / "p.png"));
+  // --png naming one of the maps it reads is refused before any work.
+  const Result over = run("preview " + (d / "base.obj").string() + " --maps " + (d / "maps").string() + " --method pom --headless --png " +
+                          (d / "maps" / "normal_ts.png").string() + " --size 8x8");
+  EXPECT_EQ(over.code, 2) << over.err;
+  EXPECT_NE(over.err.find("is also the input"), std::string::npos) << over.err;
 }
 
 // --shade height: object units in an EXR; in an 8-bit PNG normalised to the map's range with

@@ -248,6 +248,7 @@ void add_preview(CLI::App& app, Context& ctx) {
       if (!has_uvs(base)) throw InputError(args->base, "has no texture coordinates; the maps cannot be applied");
       const std::filesystem::path dir(args->maps);
       PreviewMaps maps;
+      refuse_overwriting_input(args->png, {args->base, (dir / "displacement.exr").string(), (dir / "normal_ts.png").string()});
       maps.displacement = read_image(dir / "displacement.exr");
       if (!maps.displacement.pixels.empty()) {
         // Finite heights whose span is not (e.g. -3e38 and 3e38) cannot be normalised in
