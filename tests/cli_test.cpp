@@ -1682,6 +1682,54 @@ TEST(CliPreview, DisplacementBeyondTheFloatSpanIsRefused) {
   EXPECT_NE(over.err.find("is also the input"), std::string::npos) << over.err;
 }
 
+// Maps the previewer must draw, or refuse, as the other stages do (a degenerate-input sweep):
+// a displacement.exr with more channels draws channel 0 (a G of 1e20 had emptied the frame);
+// a surface displaced 2 units below a unit base is drawn (the depth range had clipped it);
+// a base without area is bad input (compare had said "need -nan" with exit 2).
+TEST(CliPreview, DrawsChannelZeroAndFarDisplacementsAndRefusesAFlatBase) {
+  test::TempDir d;
+  write_mesh(test::make_grid(2, 2), d / "base.obj");
+  Image one(8, 8, 1), three(8, 8, 3), normals(8, 8, 3, 0.5f), far(8, 8, 1);
+  for (int y = 0; y < 8; ++y)
+    for (int x = 0; x < 8; ++x) {
+      one.at(x, y) = three.at(x, y, 0) = 0.01f * static_cast<float>((x + y) % 3);
+      three.at(x, y, 1) = 1e20f;
+      three.at(x, y, 2) = -3.0f;
+      far.at(x, y) = -2.0f + 0.01f * static_cast<float>(x);
+    }
+  for (const auto& [name, image] : {std::pair<std::string, const Image*>{"one", &one}, {"three", &three}, {"far", &far}}) {
+    fs::create_directories(d / name);
+    write_image(*image, d / name / "displacement.exr", PixelFormat::float32);
+    write_image(normals, d / name / "normal_ts.png", PixelFormat::uint8);
+  }
+  auto render = [&](const std::string& maps, const std::string& method) {
+    const fs::path png = d / (maps + "_" + method + ".png");
+    const Result r = run("preview " + (d / "base.obj").string() + " --maps " + (d / maps).string() + " --method " + method +
+                         " --headless --size 32x32 --view-angle 30 --png " + png.string());
+    EXPECT_EQ(r.code, 0) << r.err;
+    return r.code == 0 ? read_image(png) : Image();
+  };
+  auto covered = [](const Image& img) {
+    size_t n = 0;
+    for (size_t i = 3; i < img.pixels.size(); i += 4) n += img.pixels[i] > 0;
+    return n;
+  };
+  for (const char* method : {"relief", "mesh"}) {
+    const Image a = render("one", method), b = render("three", method);
+    EXPECT_GT(covered(a), 100u) << method;
+    EXPECT_EQ(a.pixels, b.pixels) << method << ": channels 1 and 2 must not matter";
+    EXPECT_GT(covered(render("far", method)), 100u) << method << ": the surface 2 units below is drawn";
+  }
+  Mesh flat = test::make_grid(2, 2);
+  for (auto v : flat.vertices()) flat.set_point(v, Vec3f(0.5f, 0.5f, 0.0f));
+  write_mesh(flat, d / "point.obj");
+  for (const std::string& mode : {" --headless --png " + (d / "p.png").string(), std::string(" --compare")}) {
+    const Result r = run("preview " + (d / "point.obj").string() + " --maps " + (d / "one").string() + " --method pom --size 16x16" + mode);
+    EXPECT_EQ(r.code, 3) << mode << "\n" << r.err;
+    EXPECT_NE(r.err.find("point.obj: has no surface area"), std::string::npos) << r.err;
+  }
+}
+
 // --shade height: object units in an EXR; in an 8-bit PNG normalised to the map's range with
 // the mapping in its metadata (the raw heights, all below 1/255 unit, had come out black).
 TEST(CliPreview, HeightShadeIsReadableInEveryFormat) {

@@ -246,10 +246,25 @@ void add_preview(CLI::App& app, Context& ctx) {
       nlohmann::json base_report;
       const Mesh base = load_mesh(ctx.globals, args->base, base_report);
       if (!has_uvs(base)) throw InputError(args->base, "has no texture coordinates; the maps cannot be applied");
+      {
+        // Nothing to frame or draw (all vertices at one point, or on one line): the compare's
+        // reference had said "need -nan" with a usage error, headless drew an empty frame.
+        double area = 0;
+        for (auto f : base.faces()) area += face_area(base, f);
+        if (!(area > 0)) throw InputError(args->base, "has no surface area (its faces are all degenerate): nothing to draw");
+      }
       const std::filesystem::path dir(args->maps);
       PreviewMaps maps;
       refuse_overwriting_input(args->png, {args->base, (dir / "displacement.exr").string(), (dir / "normal_ts.png").string()});
       maps.displacement = read_image(dir / "displacement.exr");
+      if (maps.displacement.channels > 1) {
+        // Channel 0 is the height, as for the streams (a G of 1e20 had set the height range
+        // and emptied the frame).
+        Image height(maps.displacement.width, maps.displacement.height, 1);
+        for (size_t i = 0; i < height.pixels.size(); ++i) height.pixels[i] = maps.displacement.pixels[i * static_cast<size_t>(maps.displacement.channels)];
+        height.metadata = std::move(maps.displacement.metadata);
+        maps.displacement = std::move(height);
+      }
       if (!maps.displacement.pixels.empty()) {
         // Finite heights whose span is not (e.g. -3e38 and 3e38) cannot be normalised in
         // float: the streams refuse such a map, and so does the previewer.

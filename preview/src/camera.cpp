@@ -22,7 +22,7 @@ std::array<float, 16> multiply(const std::array<float, 16>& a, const std::array<
 
 }  // namespace
 
-CameraPose frame_camera(const Mesh& base, const PreviewCamera& cam, float aspect) {
+CameraPose frame_camera(const Mesh& base, const PreviewCamera& cam, float aspect, double reach) {
   // Mean normal: the area-weighted sum of face normals.
   Vec3d n(0, 0, 0);
   for (auto f : base.faces()) {
@@ -66,7 +66,10 @@ CameraPose frame_camera(const Mesh& base, const PreviewCamera& cam, float aspect
   view[13] = static_cast<float>(-OpenMesh::dot(u, eye));
   view[14] = static_cast<float>(OpenMesh::dot(f, eye));
   view[15] = 1.0f;
-  const double near_plane = std::max(dist - 1.5 * radius, dist * 1e-3), far_plane = dist + 1.5 * radius;
+  // A map 2 units below a unit base was clipped away by a depth range of the base's box alone
+  // (an empty frame at any zoom).
+  const double depth_radius = 1.5 * radius + (std::isfinite(reach) ? std::abs(reach) : 0.0);
+  const double near_plane = std::max(dist - depth_radius, dist * 1e-3), far_plane = dist + depth_radius;
   const double ft = 1.0 / std::tan(0.5 * fov);
   std::array<float, 16> proj{};
   proj[0] = static_cast<float>(ft / aspect);

@@ -18,7 +18,10 @@ struct CameraPose {
   OpenMesh::Vec3d eye_d{0, 0, 0}, right{1, 0, 0}, up{0, 1, 0}, forward{0, 0, -1};
   double tan_half_fov = 1, aspect = 1;
 };
-CameraPose frame_camera(const Mesh& base, const PreviewCamera& camera, float aspect);
+// `reach`: how far (object units) the displaced surface may lie from the base, the larger of
+// |displacement min| and |max|; the depth range covers the base's box grown by it, so a
+// surface displaced far below or above its base is not clipped. The framing is the base's.
+CameraPose frame_camera(const Mesh& base, const PreviewCamera& camera, float aspect, double reach = 0);
 
 // The ray through the centre of pixel (x, y) of a width x height image, rows from the top
 // (Image's convention): the ray along which the rasteriser samples that pixel with

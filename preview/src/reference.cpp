@@ -199,6 +199,7 @@ struct ReferenceRenderer::Impl {
   std::vector<RTCBounds> piece_bounds;  // their boxes (relative to origin), for Embree's build
   unsigned patch_geometry = RTC_INVALID_GEOMETRY_ID;
   double max_edge = 0, build_ms = 0;
+  double reach = 0;  // the larger of |displacement min| and |max|, object units
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;
 
@@ -206,6 +207,10 @@ struct ReferenceRenderer::Impl {
       : base(mesh), displacement(maps.displacement), normal_ts(maps.normal_ts), wrap(maps_tile(maps)) {
     if (displacement.empty() || normal_ts.empty()) throw std::logic_error("reference: maps are empty");
     if (!has_uvs(base)) throw std::logic_error("reference: base mesh without UVs");
+    {
+      const auto [lo, hi] = std::minmax_element(displacement.pixels.begin(), displacement.pixels.end());
+      reach = std::max(-static_cast<double>(*lo), static_cast<double>(*hi));  // frame_camera's, as the renderer's
+    }
     const auto t0 = std::chrono::steady_clock::now();
     frames = compute_tangent_frames(base);
     prepare_triangles();
@@ -639,7 +644,7 @@ struct ReferenceRenderer::Impl {
 
   Image render(const PreviewOptions& o) const {
     if (o.width < 1 || o.height < 1) throw UsageError("reference: image size must be positive");
-    const CameraPose pose = frame_camera(base, o.camera, static_cast<float>(o.width) / static_cast<float>(o.height));
+    const CameraPose pose = frame_camera(base, o.camera, static_cast<float>(o.width) / static_cast<float>(o.height), reach);
     // Embree takes ray origins and geometry within about 1.8e18 of its origin (FLT_LARGE; it
     // asserts beyond): a mesh or camera farther out is refused rather than crashed on.
     const Box3 box = bounding_box(base);

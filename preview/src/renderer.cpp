@@ -705,7 +705,7 @@ int SurfaceRenderer::bind_dstream(const PreviewOptions& o, const CameraPose& pos
 }
 
 std::vector<Vec3f> SurfaceRenderer::dstream_positions(const PreviewOptions& o) {
-  const CameraPose pose = frame_camera(base_, o.camera, static_cast<float>(o.width) / static_cast<float>(o.height));
+  const CameraPose pose = frame_camera(base_, o.camera, static_cast<float>(o.width) / static_cast<float>(o.height), std::max(-h_min_, h_max_));
   const int level = bind_dstream(o, pose);
   if (level < 0) return {};
   const GLsizei count = dstream_vertex_count_[static_cast<size_t>(level)];
@@ -793,7 +793,7 @@ SurfaceRenderer::~SurfaceRenderer() {
 }
 
 void SurfaceRenderer::draw(const PreviewOptions& o, int width, int height) {
-  const CameraPose pose = frame_camera(base_, o.camera, static_cast<float>(width) / static_cast<float>(height));
+  const CameraPose pose = frame_camera(base_, o.camera, static_cast<float>(width) / static_cast<float>(height), std::max(-h_min_, h_max_));
   glViewport(0, 0, width, height);
   glClearColor(0, 0, 0, 0);
   glClearDepth(1.0);
