@@ -1513,6 +1513,33 @@ TEST(CliBake, CageLeansTheRaysAndBoundsTheirReach) {
   EXPECT_NEAR(flat_report["displacement_max"].get<double>(), 0.01, 1e-5) << "along the normal";
 }
 
+// Inputs a degenerate-input sweep found accepted silently: a base whose UVs tile 0..2 is
+// baked only inside [0, 1] (now a warning naming the count); a detail map whose values span
+// more than a float had its gradient overflow (now refused as the streams refuse it).
+TEST(CliBake, TiledUvsWarnAndADetailBeyondTheFloatSpanIsRefused) {
+  test::TempDir dir;
+  Mesh tiled = test::make_grid(2, 2);
+  for (auto h : tiled.halfedges())
+    if (!tiled.is_boundary(h)) tiled.set_texcoord2D(h, tiled.texcoord2D(h) * 2.0f);
+  write_mesh(tiled, dir / "tiled.obj");
+  write_mesh(test::make_grid(2, 2), dir / "low.obj");
+  write_mesh(test::make_layers({{0.01f, true}}), dir / "high.obj");
+  const Result t = run(bake_args(dir, "tiled.obj", "high.obj", "t", "--size 8 --front 0.1 --back 0.1"));
+  EXPECT_EQ(t.code, 0) << t.err;
+  EXPECT_NE(t.err.find("tiled.obj: 6 of 8 faces have UVs outside [0, 1]"), std::string::npos) << t.err;
+  const Result plain = run(bake_args(dir, "low.obj", "high.obj", "p", "--size 8 --front 0.1 --back 0.1"));
+  EXPECT_EQ(plain.code, 0) << plain.err;
+  EXPECT_EQ(plain.err.find("outside [0, 1]"), std::string::npos) << plain.err;
+  Image checker(4, 4, 1);
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 4; ++x) checker.at(x, y) = (x + y) % 2 ? 3e38f : -3e38f;
+  write_image(checker, dir / "checker.exr", PixelFormat::float32);
+  const Result detail = run(bake_args(dir, "low.obj", "high.obj", "d", "--size 8 --detail " + (dir / "checker.exr").string()));
+  EXPECT_EQ(detail.code, 3) << detail.err;
+  EXPECT_NE(detail.err.find("checker.exr: its values span more than the float range"), std::string::npos) << detail.err;
+  EXPECT_FALSE(fs::exists(dir / "d"));
+}
+
 // --basis pn: a coarse sphere band (12 sides, radial normals in the file) over a fine one. The
 // flat triangles sit well inside the sphere; the PN patches built from the normals follow it
 // far more closely (the report's displacement range over hits, --dilate 0).

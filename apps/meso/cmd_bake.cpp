@@ -147,6 +147,17 @@ void add_bake(CLI::App& app, Context& ctx) {
       Image detail;
       if (!args->detail.empty()) {
         detail = read_image(args->detail);
+        {
+          // Channel 0 is the bump; finite values whose span is not (a +-3e38 checker) would
+          // make its gradient overflow, silently dropped from the normals (the streams refuse
+          // such a map too).
+          float lo = 0, hi = 0;
+          for (size_t i = 0; i < detail.pixels.size(); i += static_cast<size_t>(detail.channels)) {
+            lo = std::min(lo, detail.pixels[i]);
+            hi = std::max(hi, detail.pixels[i]);
+          }
+          if (!std::isfinite(hi - lo)) throw InputError(args->detail, "its values span more than the float range; rescale the map");
+        }
         o.detail = &detail;
         o.detail_scale = args->detail_scale;
       }
@@ -170,6 +181,22 @@ void add_bake(CLI::App& app, Context& ctx) {
       nlohmann::json low_report, high_report;
       const Mesh low = load_mesh(ctx.globals, args->low, low_report);
       if (!has_uvs(low)) throw InputError(args->low, "has no texture coordinates; bake needs a UV-mapped base mesh");
+      {
+        // The map covers [0, 1]^2 once: a face reaching outside (tiling UVs) is baked only
+        // where it lies inside, which exit 0 with no miss had hidden.
+        size_t outside = 0;
+        for (auto f : low.faces())
+          for (auto h : low.fh_range(f)) {
+            const Vec2f uv = low.texcoord2D(h);
+            if (uv[0] < -1e-6f || uv[0] > 1 + 1e-6f || uv[1] < -1e-6f || uv[1] > 1 + 1e-6f) {  // beyond rounding
+              ++outside;
+              break;
+            }
+          }
+        if (outside)
+          warn(ctx.globals, args->low + ": " + std::to_string(outside) + " of " + std::to_string(low.n_faces()) +
+                                " faces have UVs outside [0, 1]; the maps hold only their parts inside (uvpack check lists them)");
+      }
       const Mesh high = load_mesh(ctx.globals, args->high, high_report);
       Mesh cage;
       nlohmann::json cage_report;
