@@ -996,6 +996,14 @@ TEST(Cli, UvpackPackUnwrapsAMeshWithoutUvs) {
       run("--json uvpack pack " + (dir / "cube.obj").string() + " -o " + (dir / "re.obj").string() + " --size 64 --unwrap --max-stretch 1.05 --chart-angle 30");
   ASSERT_EQ(rewrapped.code, 0) << rewrapped.err;
   EXPECT_EQ(nlohmann::json::parse(rewrapped.out)["unwrap"]["charts"], 6);
+  // A mesh without area has nothing to unwrap, which is what the error says (it had said
+  // "--unwrap makes new ones" to a user who gave --unwrap).
+  Mesh point = test::make_grid(2, 2);
+  for (auto v : point.vertices()) point.set_point(v, Vec3f(1, 1, 1));
+  write_mesh(point, dir / "point.obj");
+  const Result none = run("uvpack pack " + (dir / "point.obj").string() + " -o " + (dir / "x.obj").string() + " --size 64 --unwrap");
+  EXPECT_EQ(none.code, 3) << none.err;
+  EXPECT_NE(none.err.find("point.obj: has no surface area"), std::string::npos) << none.err;
   EXPECT_EQ(run("uvpack pack " + (dir / "cube.obj").string() + " -o " + (dir / "x.obj").string() + " --unwrap-method tutte").code, 2);
   EXPECT_EQ(run("uvpack pack " + (dir / "cube.obj").string() + " -o " + (dir / "x.obj").string() + " --max-stretch 0.5").code, 2);
   EXPECT_FALSE(fs::exists(dir / "x.obj"));
