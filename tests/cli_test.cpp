@@ -1071,6 +1071,18 @@ TEST(Cli, FramesWritesACurvatureMap) {
 namespace meso {
 namespace {
 
+// A mesh without surface area (collinear faces) has no distance to measure: the report has
+// no `error` and a warning says why (every distance field had been null).
+TEST(CliMeshreduce, NoDistanceForAMeshWithoutArea) {
+  test::TempDir dir;
+  test::write_text(dir / "line.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 3 0 0\nf 1 2 3\nf 2 3 4\n");
+  const Result r = run("meshreduce " + (dir / "line.obj").string() + " -o " + (dir / "out.obj").string() + " --ratio 0.5 --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.out.find("null"), std::string::npos) << r.out;
+  EXPECT_FALSE(nlohmann::json::parse(r.out).contains("error"));
+  EXPECT_NE(r.err.find("no distance measured: the input has no surface area"), std::string::npos) << r.err;
+}
+
 TEST(CliMeshreduce, QualityPresets) {
   test::TempDir d;
   const std::string in = (d / "grid.obj").string();
