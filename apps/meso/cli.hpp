@@ -83,6 +83,10 @@ std::string short_number(double v);
 #include "meso/core/mesh.hpp"
 
 namespace meso::cli {
+// Whether any face of `mesh` has area (face_area in double): a mesh whose faces are all
+// degenerate has no surface to draw, unwrap or measure.
+bool has_surface_area(const Mesh& mesh);
+
 // Reads a mesh file, warns about what import had to repair, and records counts in `report`.
 Mesh load_mesh(Globals& g, const std::string& path, nlohmann::json& report);
 }  // namespace meso::cli

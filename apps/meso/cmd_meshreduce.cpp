@@ -45,14 +45,11 @@ void add_distance(nlohmann::json& report, Globals& g, const Mesh& input, const M
   // The measure samples and queries surfaces: without area there is none (the fields had
   // come out null, with a warning that read like a failure). The report then has no `error`,
   // as with --no-measure.
-  for (const Mesh* m : {&input, &out}) {
-    double area = 0;
-    for (auto f : m->faces()) area += face_area(*m, f);
-    if (!(area > 0)) {
+  for (const Mesh* m : {&input, &out})
+    if (!has_surface_area(*m)) {
       warn(g, std::string("no distance measured: the ") + (m == &input ? "input" : "output") + " has no surface area (its faces are all degenerate)");
       return;
     }
-  }
   const SurfaceDistance d = measured ? *measured : measure_surface_distance(input, out);
   const double pct = diagonal > 0 ? 100.0 / diagonal : 0.0;
   report["error"] = {{"hausdorff", d.hausdorff},

@@ -246,13 +246,9 @@ void add_preview(CLI::App& app, Context& ctx) {
       nlohmann::json base_report;
       const Mesh base = load_mesh(ctx.globals, args->base, base_report);
       if (!has_uvs(base)) throw InputError(args->base, "has no texture coordinates; the maps cannot be applied");
-      {
-        // Nothing to frame or draw (all vertices at one point, or on one line): the compare's
-        // reference had said "need -nan" with a usage error, headless drew an empty frame.
-        double area = 0;
-        for (auto f : base.faces()) area += face_area(base, f);
-        if (!(area > 0)) throw InputError(args->base, "has no surface area (its faces are all degenerate): nothing to draw");
-      }
+      // Nothing to frame or draw (all vertices at one point, or on one line): the compare's
+      // reference had said "need -nan" with a usage error, headless drew an empty frame.
+      if (!has_surface_area(base)) throw InputError(args->base, "has no surface area (its faces are all degenerate): nothing to draw");
       const std::filesystem::path dir(args->maps);
       PreviewMaps maps;
       refuse_overwriting_input(args->png, {args->base, (dir / "displacement.exr").string(), (dir / "normal_ts.png").string()});

@@ -217,13 +217,9 @@ void add_uvpack(CLI::App& app, Context& ctx) {
       nlohmann::json unwrap_report;
       if (pack_args->unwrap || !has_uvs(mesh)) {
         if (mesh.n_faces() == 0) throw InputError(pack_args->input, "has no faces to unwrap");
-        {
-          // Nothing to flatten: the unwrap would leave UVs without area, and the message
-          // below would then suggest --unwrap to a user who gave it.
-          double area = 0;
-          for (auto f : mesh.faces()) area += face_area(mesh, f);
-          if (!(area > 0)) throw InputError(pack_args->input, "has no surface area (its faces are all degenerate): nothing to unwrap");
-        }
+        // Nothing to flatten: the unwrap would leave UVs without area, and the message below
+        // would then suggest --unwrap to a user who gave it.
+        if (!has_surface_area(mesh)) throw InputError(pack_args->input, "has no surface area (its faces are all degenerate): nothing to unwrap");
         if (!has_uvs(mesh)) info(ctx.globals, pack_args->input + ": no texture coordinates, unwrapping");
         UvUnwrapOptions u = pack_args->unwrap_options;
         u.method = pack_args->unwrap_method == "arap" ? UnwrapMethod::arap : UnwrapMethod::lscm;

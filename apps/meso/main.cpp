@@ -94,6 +94,12 @@ void refuse_beyond_memory(const std::string& what, double bytes) {
   }
 }
 
+bool has_surface_area(const Mesh& mesh) {
+  for (auto f : mesh.faces())
+    if (face_area(mesh, f) > 0) return true;
+  return false;
+}
+
 std::string short_number(double v) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.6g", v);
