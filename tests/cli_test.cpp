@@ -272,6 +272,24 @@ TEST(Cli, HugeCountsAreOutOfRange) {
   EXPECT_NE(size.err.find("out of range"), std::string::npos) << size.err;
 }
 
+// Bounded floating-point options refuse NaN (CLI::Range let it through: `streams vdm
+// --theta-max nan` wrote an all-zero map with exit 0) and say their range as written.
+TEST(Cli, BoundedNumbersRefuseNanAndSayTheirRange) {
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"streams vdm h.exr -o v.exr --theta-max nan", "--theta-max: 'nan' is not a number in [1, 90]"},
+      {"preview b.obj --maps m --view-angle 95", "--view-angle: '95' is not a number in [0, 89.9]"},
+      {"meshreduce a.obj -o b.obj --ratio 0", "--ratio: '0' is not a number in (0, 1]"},
+      {"meshreduce a.obj -o b.obj --ratio inf", "--ratio: 'inf' is not a number in (0, 1]"},
+      {"preview b.obj --maps m --zoom 1e9", "--zoom: '1e9' is not a number in [0.001, 1000]"},
+  };
+  for (const auto& [args, message] : cases) {
+    const Result r = run(args);
+    EXPECT_EQ(r.code, 2) << args << "\n" << r.err;
+    EXPECT_EQ(lines(r.err), 1u) << r.err;
+    EXPECT_NE(r.err.find(message), std::string::npos) << args << "\n" << r.err;
+  }
+}
+
 // A bake whose maps cannot fit in this machine's memory is refused before any work (32768^2,
 // about 53 GB, had run a 24 GB machine out of memory).
 TEST(Cli, BakeBeyondTheMachinesMemoryIsRefused) {

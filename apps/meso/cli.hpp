@@ -52,6 +52,10 @@ extern const CLI::Validator Finite;
 // Finite and above 0; finite and 0 or more.
 extern const CLI::Validator Positive;
 extern const CLI::Validator NonNegative;
+// A finite number in [lo, hi], or in (lo, hi] with above_lo, for floating-point options.
+// Why not CLI::Range: it lets NaN through (every comparison with NaN is false) and prints
+// its bounds with six decimals ("not in range 0.000000 to 89.900000").
+CLI::Validator InRange(double lo, double hi, bool above_lo = false);
 // A file name write_image takes (.png, .exr, .tif).
 extern const CLI::Validator ImageOutput;
 

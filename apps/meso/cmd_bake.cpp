@@ -101,7 +101,7 @@ void add_bake(CLI::App& app, Context& ctx) {
   sub->add_option("--detail", args->detail,
                   "Detail bump map on the high mesh (its UVs, tiled; mid-grey neutral): adds to the displacement and tilts the normals");
   sub->add_option("--detail-scale", args->detail_scale, "Object units per unit of the detail map's value")
-      ->check(CLI::Range(-1e6, 1e6) & Finite)
+      ->check(InRange(-1e6, 1e6))
       ->capture_default_str();
   sub->add_option("--hit", args->hit, "Which hit gives a texel its value: nearest, furthest, front-else-nearest, front-only")
       ->check(CLI::IsMember({"nearest", "furthest", "front-else-nearest", "front-only"}))
@@ -120,7 +120,7 @@ void add_bake(CLI::App& app, Context& ctx) {
                   "percentage of the diagonal (default 0.1%)");
   sub->add_option("--max-miss-rate", args->max_miss_rate,
                   "Exit 1 (outputs still written) when more than this fraction of covered texels miss")
-      ->check(CLI::Range(0.0, 1.0) & Finite);
+      ->check(InRange(0.0, 1.0));
   sub->add_option("--dilate", args->dilate, "Texels to fill around charts: a count, or inf (or -1) for the whole map")
       ->capture_default_str();
   sub->callback([&ctx, args] {

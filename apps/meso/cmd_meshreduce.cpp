@@ -118,7 +118,7 @@ void add_meshreduce(CLI::App& app, Context& ctx) {
   sub->add_option("-o,--output", args->output, "Output mesh (.obj, .ply, .gltf, .glb)")->required();
   auto* faces = sub->add_option("--faces", args->faces, "Target face count")->check(Positive);
   auto* ratio = sub->add_option("--ratio", args->ratio, "Target as a fraction of the input's faces")
-                    ->check(CLI::Range(0.0, 1.0) & Finite);
+                    ->check(InRange(0.0, 1.0, true));
   auto* error = sub->add_option("--error", args->error,
                                 "Target: the largest geometric error (two-sided, sampled), in object units, or in % of the "
                                 "bounding-box diagonal with a % sign (0.5%); reduces as far as the error stays within it");
@@ -127,7 +127,7 @@ void add_meshreduce(CLI::App& app, Context& ctx) {
   ratio->excludes(error);
   sub->add_option("--max-normal-deviation", args->max_normal_deviation,
                   "Largest angle in degrees between an output face's normal and the input faces it replaced (180: off)")
-      ->check(CLI::Range(0.0f, 180.0f) & Finite)
+      ->check(InRange(0.0, 180.0))
       ->capture_default_str();
   sub->add_option("--max-aspect-ratio", args->max_aspect_ratio,
                   "Refuse collapses that create a triangle with a larger aspect ratio (longest edge^2 * sqrt(3) / (4 area): "

@@ -127,13 +127,13 @@ void add_preview(CLI::App& app, Context& ctx) {
   sub->add_option("--size", args->size, "Image size WxH");
   sub->add_option("--view-angle", args->options.camera.view_angle,
                   "Degrees between the view direction and the mesh's mean normal (0 to 89.9)")
-      ->check(CLI::Range(0.0, 89.9) & Finite);
-  sub->add_option("--azimuth", args->options.camera.azimuth, "Degrees around the mean normal")->check(CLI::Range(-3600.0, 3600.0) & Finite);
-  sub->add_option("--zoom", args->options.camera.zoom, "Zoom factor (> 1 moves closer)")->check(CLI::Range(1e-3, 1e3) & Finite);
+      ->check(InRange(0.0, 89.9));
+  sub->add_option("--azimuth", args->options.camera.azimuth, "Degrees around the mean normal")->check(InRange(-3600.0, 3600.0));
+  sub->add_option("--zoom", args->options.camera.zoom, "Zoom factor (> 1 moves closer)")->check(InRange(1e-3, 1e3));
   sub->add_option("--pan", args->pan, "X,Y: move the view right and up by X and Y framing radii (half the mesh's box diagonal)")
       ->expected(2)
       ->delimiter(',')
-      ->check(CLI::Range(-1e3, 1e3) & Finite);
+      ->check(InRange(-1e3, 1e3));
   sub->add_option("--iterations", args->options.iterations, "Main iteration budget of the method")->check(CLI::Range(1, 4096));
   sub->add_option("--shade", args->shade, "lit, uv (visible point's UV in R,G) or height")
       ->check(CLI::IsMember({"lit", "uv", "height"}));
@@ -141,17 +141,17 @@ void add_preview(CLI::App& app, Context& ctx) {
       ->check(CLI::IsMember({"none", "hard", "soft"}));
   sub->add_option("--shadow-steps", args->options.shadow_steps, "Height samples along a shadow ray")->check(CLI::Range(1, 4096));
   sub->add_option("--light-size", args->options.light_size, "Angular radius of the soft shadows' light, degrees")
-      ->check(CLI::Range(0.0, 45.0) & Finite);
+      ->check(InRange(0.0, 45.0));
   sub->add_option("--light-elevation", args->options.camera.light_elevation, "Light: degrees above the mesh's mean plane")
-      ->check(CLI::Range(-90.0, 90.0) & Finite);
-  sub->add_option("--light-azimuth", args->options.camera.light_azimuth, "Light: degrees around the mean normal")->check(CLI::Range(-3600.0, 3600.0) & Finite);
+      ->check(InRange(-90.0, 90.0));
+  sub->add_option("--light-azimuth", args->options.camera.light_azimuth, "Light: degrees around the mean normal")->check(InRange(-3600.0, 3600.0));
   sub->add_flag("--silhouettes", args->options.silhouettes,
                 "Curved rays for steep/relief/pom (the base's curvature along the view, section 5.1 of the survey; rays that "
                 "leave the surface are discarded) and, on maps that do not tile, discard visible points off the map");
   sub->add_option("--morph", args->options.morph,
                   "dstream: morph every vertex toward the coarser level by this much (1: the level drawn, 0: the coarser level's surface); "
                   "default: by distance (--lod-distance)")
-      ->check(CLI::Range(0.0, 1.0) & Finite);
+      ->check(InRange(0.0, 1.0));
   sub->add_option("--lod-distance", args->options.lod_distance,
                   "dstream: vertices nearer than this (object units) take the level drawn (the finest within --iterations segments per "
                   "edge), farther than twice this the coarser level's surface, morphing between (0: no morph)")
@@ -163,7 +163,7 @@ void add_preview(CLI::App& app, Context& ctx) {
       ->check(CLI::Range(0, 64));
   sub->add_option("--dig-epsilon", args->options.dig_epsilon,
                   "dig: least widening of a block's depth interval above its corners' (epsilon_1), fraction of the height range (default 0.1)")
-      ->check(CLI::Range(0.0, 1.0) & Finite);
+      ->check(InRange(0.0, 1.0));
   sub->add_option("--dig-fallback", args->options.dig_fallback_texels,
                   "dig: a block whose corner rays are more than this many texels apart across the ray's path searches the "
                   "whole slab (default 8; 0: never)")
@@ -174,9 +174,9 @@ void add_preview(CLI::App& app, Context& ctx) {
       ->check(NonNegative);
   sub->add_option("--tess-normal-angle", args->options.tess_normal_angle,
                   "tessellation: at least one segment per this many degrees between an edge's end normals (default 5)")
-      ->check(CLI::Range(0.01, 360.0) & Finite);
+      ->check(InRange(0.01, 360.0));
   sub->add_option("--tess-pixels", args->options.tess_pixels, "tessellation: no segment shorter than this on screen, pixels (default 2)")
-      ->check(CLI::Range(0.01, 1e6) & Finite);
+      ->check(InRange(0.01, 1e6));
   sub->add_option("--tess-samples", args->options.tess_edge_samples,
                   "tessellation: intervals at which an edge's displacement is sampled for the departure test (default 8)")
       ->check(CLI::Range(1, 64));

@@ -138,7 +138,7 @@ void add_streams(CLI::App& app, Context& ctx) {
                 : "Conservative cone map (Dummer), exact for the bilinear surface: no point of it inside any cone",
         "Output EXR (MIP-mapped: R = height, G = cone ratio, B = apex height)", *cone_args);
     cone->add_option("--tolerance", *tolerance, "Relative gap allowed below the exact ratio (the stored one is never wider)")
-        ->check(CLI::Range(1e-6, 0.5) & Finite)
+        ->check(InRange(1e-6, 0.5))
         ->capture_default_str();
     if (relaxed)
       cone->add_option("--fans", *fans,
@@ -201,12 +201,12 @@ void add_streams(CLI::App& app, Context& ctx) {
   CLI::App* vdm_cmd = add_stream_subcommand(streams, "vdm", "View-dependent displacement map (Wang et al.): per texel, view direction and curvature, where the view ray meets the surface; PCA-compressed",
                                             "Output EXR, two parts: per-texel PCA weights, and the mean and basis per direction", *vdm_args);
   vdm_cmd->add_option("--theta", vdm->options.theta, "View angles from the normal (sampled at the centres of [0, --theta-max])")->check(CLI::Range(1, 256))->capture_default_str();
-  vdm_cmd->add_option("--theta-max", vdm->options.theta_max, "Largest view angle from the normal, degrees")->check(CLI::Range(1.0, 90.0))->capture_default_str();
+  vdm_cmd->add_option("--theta-max", vdm->options.theta_max, "Largest view angle from the normal, degrees")->check(InRange(1.0, 90.0))->capture_default_str();
   vdm_cmd->add_option("--phi", vdm->options.phi, "Azimuths around the normal")->check(CLI::Range(1, 1024))->capture_default_str();
   vdm_cmd->add_option("--curvatures", vdm->curvatures, "Comma-separated curvatures along the view direction, per unit of u, increasing (default: 0, a flat base; with --mesh: from the mesh)");
   vdm_cmd->add_option("--mesh", vdm->mesh, "Base mesh: relief from its size (unless --relief) and curvature slices from quadric fits (unless --curvatures)");
   vdm_cmd->add_option("--curvature-steps", vdm->curvature_steps, "With --mesh: curvature samples over the mesh's range (5th percentile of k2 to 95th of k1; 1: the median mean curvature)")->check(CLI::Range(1, 64))->capture_default_str();
-  vdm_cmd->add_option("--relief", vdm->options.relief, "Height range in units of u (default 0.1, or from --mesh)")->check(CLI::Range(1e-9, 1e9) & Finite);
+  vdm_cmd->add_option("--relief", vdm->options.relief, "Height range in units of u (default 0.1, or from --mesh)")->check(InRange(1e-9, 1e9));
   vdm_cmd->add_option("--max-error", vdm->max_error, "Largest RMS error of the compressed table, units of u")->check(NonNegative)->capture_default_str();
   vdm_cmd->add_option("--max-rank", vdm->max_rank, "Largest number of PCA components")->check(CLI::Range(0, 4096))->capture_default_str();
   vdm_cmd->callback([&ctx, vdm_args, vdm, vdm_cmd] {
@@ -311,8 +311,8 @@ void add_streams(CLI::App& app, Context& ctx) {
   dstream->add_option("--high", ds->high, "High-poly mesh")->required();
   dstream->add_option("-o,--output", ds->output, "Output file (dstream.bin, docs/formats.md)")->required();
   dstream->add_option("--levels", ds->options.levels, "Levels 0..L-1, level l with 2^l segments per edge")->check(CLI::Range(1, 7))->capture_default_str();
-  dstream->add_option("--front", ds->front, "Ray reach outward, object units (0: 5% of the high mesh's diagonal)")->check(CLI::Range(0.0, 1e30) & Finite);
-  dstream->add_option("--back", ds->back, "Ray reach inward, object units (0: as --front)")->check(CLI::Range(0.0, 1e30) & Finite);
+  dstream->add_option("--front", ds->front, "Ray reach outward, object units (0: 5% of the high mesh's diagonal)")->check(InRange(0.0, 1e30));
+  dstream->add_option("--back", ds->back, "Ray reach inward, object units (0: as --front)")->check(InRange(0.0, 1e30));
   dstream->callback([&ctx, ds] {
     ctx.run = [&ctx, ds](nlohmann::json& report, Progress& progress) {
       refuse_overwriting_input(ds->output, {ds->low, ds->high});
@@ -362,7 +362,7 @@ void add_streams(CLI::App& app, Context& ctx) {
                                         "Output EXR: W x (H * depth), slices stacked, slice 0 lowest", *sdf_args);
   sdf->add_option("--depth", sdf_options->depth, "Slices along the height axis")->check(CLI::Range(1, 1024));
   sdf->add_option("--relief", sdf_options->relief, "Height range in units of the map's width (the box is 1 x H/W x relief)")
-      ->check(CLI::Range(1e-9, 1e9) & Finite);
+      ->check(InRange(1e-9, 1e9));
   sdf->callback([&ctx, sdf_args, sdf_options] {
     ctx.run = [&ctx, sdf_args, sdf_options](nlohmann::json& report, Progress& progress) {
       const HeightField field = load_height_field(*sdf_args);

@@ -193,17 +193,17 @@ void add_uvpack(CLI::App& app, Context& ctx) {
                    "A map in the mesh's current UV layout (e.g. a first bake's displacement or normal map): charts are scaled by the "
                    "detail it holds (RMS gradient), within --density-clamp, so detailed charts get more texels");  // a missing file: exit 3 on reading, as every input
   pack->add_option("--density-clamp", pack_args->density_clamp, "Largest growth or shrink of a chart's linear scale by --density")
-      ->check(CLI::Range(1.0, 16.0) & Finite)
+      ->check(InRange(1.0, 16.0))
       ->capture_default_str();
   pack->add_flag("--unwrap", pack_args->unwrap, "Make new charts (normal-cone charts flattened by LSCM or ARAP) instead of the mesh's UVs; implied when it has none");
   pack->add_option("--unwrap-method", pack_args->unwrap_method, "Flattening: lscm (conformal, fast) or arap (as-rigid-as-possible)")
       ->check(CLI::IsMember({"lscm", "arap"}))
       ->capture_default_str();
   pack->add_option("--max-stretch", pack_args->unwrap_options.max_stretch, "Largest L2 stretch of a chart (1 = isometric); charts above it are split")
-      ->check(CLI::Range(1.0, 1e6) & Finite)
+      ->check(InRange(1.0, 1e6))
       ->capture_default_str();
   pack->add_option("--chart-angle", pack_args->unwrap_options.max_chart_angle, "Degrees a face normal may deviate from its chart's mean normal")
-      ->check(CLI::Range(1.0, 179.0) & Finite)
+      ->check(InRange(1.0, 179.0))
       ->capture_default_str();
   pack->add_option("--max-chart-faces", pack_args->unwrap_options.max_chart_faces, "Faces per chart at most (0: no cap)")
       ->check(NonNegative)

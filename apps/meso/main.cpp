@@ -17,6 +17,7 @@
 #include <filesystem>
 #include <iostream>
 #include <optional>
+#include <sstream>
 
 #ifndef MESO_VERSION
 #define MESO_VERSION "0.0.0"
@@ -65,6 +66,25 @@ const CLI::Validator ImageOutput(
       return is_writable_image_extension(text) ? std::string() : "'" + text + "': unknown image extension (use .png, .exr or .tif)";
     },
     "IMAGE");
+CLI::Validator InRange(double lo, double hi, bool above_lo) {
+  auto bound = [](double v) {
+    std::ostringstream text;
+    text << v;  // shortest of %g's six digits: 89.9, 1e+06
+    return text.str();
+  };
+  const std::string range = (above_lo ? "(" : "[") + bound(lo) + ", " + bound(hi) + "]";
+  return CLI::Validator(
+      [=](std::string& text) -> std::string {
+        try {
+          size_t used = 0;
+          const double v = std::stod(text, &used);
+          if (used == text.size() && std::isfinite(v) && (above_lo ? v > lo : v >= lo) && v <= hi) return {};
+        } catch (const std::exception&) {
+        }
+        return "'" + text + "' is not a number in " + range;
+      },
+      "in " + range, "RANGE");
+}
 const CLI::Validator Positive = sign_check(false, "a finite number above 0", "POSITIVE");
 const CLI::Validator NonNegative = sign_check(true, "a finite number of 0 or more", "NONNEGATIVE");
 
