@@ -1504,8 +1504,8 @@ namespace {
 
 // ---- bake: the options tested only in the library until now, through the command line ----
 
-// A cage leaning (0.02, 0, 0.05) away from a flat base: rays run toward it (distances along
-// the leaning ray: a layer 0.01 up is 0.01 * slant away) and stop at it (a layer at 0.06, past
+// A cage leaning (0.02, 0, 0.05) away from a flat base: rays run toward it (a layer 0.01 up is
+// 0.01 * slant away along the leaning ray, and bakes to its height, 0.01) and stop at it (a layer at 0.06, past
 // the cage's 0.05, is out of reach: every texel misses, although --front 0.2 would reach it
 // along the normal: Bake.CageSetsTheRaysDirectionAndOutwardReach).
 TEST(CliBake, CageLeansTheRaysAndBoundsTheirReach) {
@@ -1526,8 +1526,8 @@ TEST(CliBake, CageLeansTheRaysAndBoundsTheirReach) {
   const auto near_report = nlohmann::json::parse(near.out);
   EXPECT_EQ(near_report["misses"], 0);
   EXPECT_EQ(near_report["cage"], (dir / "cage.obj").string());
-  EXPECT_NEAR(near_report["displacement_min"].get<double>(), 0.01 * slant, 1e-5);
-  EXPECT_NEAR(near_report["displacement_max"].get<double>(), 0.01 * slant, 1e-5);
+  EXPECT_NEAR(near_report["displacement_min"].get<double>(), 0.01, 1e-6) << "along the ray it is " << 0.01 * slant;
+  EXPECT_NEAR(near_report["displacement_max"].get<double>(), 0.01, 1e-6);
   const Result far = run(bake_args(dir, "low.obj", "far.obj", "far", common + cage));
   ASSERT_EQ(far.code, 0) << far.err;
   const auto far_report = nlohmann::json::parse(far.out);

@@ -80,16 +80,22 @@ int choose_hit(const std::vector<RayHit>& hits, HitRule rule, float bunch, bool&
   for (int i = 1; i < n; ++i)
     bunch_of[static_cast<size_t>(i)] = bunch_of[static_cast<size_t>(i - 1)] + (hits[static_cast<size_t>(i)].d - hits[static_cast<size_t>(i - 1)].d > bunch);
   // Score (lower is better): |d| for the nearest rules, -|d| for the furthest; outward wins
-  // a tie.
-  auto score = [&](const RayHit& h) { return (rule == HitRule::furthest ? -1.0 : 1.0) * std::abs(h.d) - (h.d >= 0 ? 1e-30 : 0); };
+  // a tie. (The tie is its own comparison: an epsilon taken off the score, as before, vanished
+  // in any |d| above 1e-14, and the inward hit, first in d order, won.)
+  auto score = [&](const RayHit& h) { return (rule == HitRule::furthest ? -1.0 : 1.0) * std::abs(h.d); };
+  auto better = [&](int i, int j) {
+    const RayHit &a = hits[static_cast<size_t>(i)], &b = hits[static_cast<size_t>(j)];
+    const double sa = score(a), sb = score(b);
+    return sa < sb || (sa == sb && a.d >= 0 && b.d < 0);
+  };
   int best = -1, second = -1;
   for (int i = 0; i < n; ++i) {
     if (fronts_only && !hits[static_cast<size_t>(i)].front) continue;
-    if (best < 0 || score(hits[static_cast<size_t>(i)]) < score(hits[static_cast<size_t>(best)])) best = i;
+    if (best < 0 || better(i, best)) best = i;
   }
   for (int i = 0; i < n; ++i) {
     if ((fronts_only && !hits[static_cast<size_t>(i)].front) || bunch_of[static_cast<size_t>(i)] == bunch_of[static_cast<size_t>(best)]) continue;
-    if (second < 0 || score(hits[static_cast<size_t>(i)]) < score(hits[static_cast<size_t>(second)])) second = i;
+    if (second < 0 || better(i, second)) second = i;
   }
   ambiguous = second >= 0 && score(hits[static_cast<size_t>(second)]) - score(hits[static_cast<size_t>(best)]) < bunch;
   // The value: the hit of the chosen bunch furthest from the base surface.
@@ -491,7 +497,8 @@ BakeResult bake_at_scale(const Mesh& low, const Mesh& high, const BakeOptions& o
     const Vec3f org = start_at(sr, -way * eps);
     const Vec3f dir_s = way > 0 ? sr.d : -sr.d;
     if (collect_first(sr, org, dir_s, way, limit + eps, probe, hits, rays, given)) return;
-    float tnear = 0.0f, tfar = limit + eps;
+    const float end = limit + eps;
+    float tnear = 0.0f, tfar = end;
     bool found_front = false;
     for (int k = 0; k < 16; ++k) {
       const auto h = scene.intersect(org, dir_s, tnear, tfar);
@@ -504,7 +511,9 @@ BakeResult bake_at_scale(const Mesh& low, const Mesh& high, const BakeOptions& o
         hits.push_back(rh);
         found_front |= rh.front;
         const bool done = !all_hits && (o.hit == HitRule::nearest || found_front);
-        if (done) tfar = std::min(tfar, h.t + r.bunch);  // only the bunch remains of interest
+        // Only the bunch remains of interest: hits within `bunch` of the previous one, a
+        // chain (choose_hit), so each hit in it moves the end on.
+        if (done) tfar = std::min(end, h.t + r.bunch);
         // Usually nothing is that close behind: an any-hit query says so for less.
         rays += done && tnear < tfar;  // the occluded() query below
         if (done && (tnear >= tfar || !scene.occluded(org, dir_s, tnear, tfar))) break;
@@ -545,7 +554,10 @@ BakeResult bake_at_scale(const Mesh& low, const Mesh& high, const BakeOptions& o
     const int chosen = choose_hit(hits, o.hit, r.bunch, unsure);
     if (chosen < 0) return false;
     const RayHit& hit = hits[static_cast<size_t>(chosen)];
-    const float disp = hit.d;
+    // With a cage the ray leans toward the cage point: the value is the hit's height along the
+    // base normal (a layer parallel to the base bakes to its height whatever the cage), not
+    // its distance along the ray. Without one the ray is the normal: d as it is.
+    const float disp = o.cage && dir != sr.base_normal ? static_cast<float>(hit.d * dir.dot(sr.base_normal)) : hit.d;
     // High normal at the hit, Embree barycentrics: (1-u-v) v0 + u v1 + v v2.
     const uint32_t* tri = &scene.arrays().triangles[3 * static_cast<size_t>(hit.prim)];
     // Component by component in float, as OpenMesh's vector operators compute it.

@@ -174,6 +174,22 @@ TEST(Bake, BunchesTakeTheirOutermostHitAndTiesAreAmbiguous) {
   EXPECT_EQ(per_face, r.ambiguous);
   EXPECT_NEAR(baked_value(make_layers({{0.010f, true}, {-0.015f, true}}), o, &ambiguous), 0.010f, 1e-6f);
   EXPECT_EQ(ambiguous, 0u);
+  // An exact tie goes outward, with either nearest rule and the furthest one (the inward hit
+  // had won: the tie-break was an epsilon lost in the score's rounding).
+  for (const HitRule rule : {HitRule::nearest, HitRule::front_else_nearest, HitRule::furthest}) {
+    BakeOptions tie = o;
+    tie.hit = rule;
+    EXPECT_NEAR(baked_value(make_layers({{0.01f, true}, {-0.01f, true}}), tie), 0.01f, 1e-6f) << hit_rule_name(rule);
+  }
+  // A bunch is a chain of hits each within `bunch` of the previous one: 0.02, 0.026 and 0.032
+  // are one bunch at 0.01, and its outermost hit is the value with every rule (the nearest
+  // rules had stopped tracing 0.01 past the first hit and answered 0.026).
+  BakeOptions chain = o;
+  chain.bunch = 0.01f;
+  for (const HitRule rule : {HitRule::nearest, HitRule::front_else_nearest, HitRule::front_only, HitRule::furthest}) {
+    chain.hit = rule;
+    EXPECT_NEAR(baked_value(make_layers({{0.02f, true}, {0.026f, true}, {0.032f, true}}), chain), 0.032f, 1e-6f) << hit_rule_name(rule);
+  }
 }
 
 // Object-space normals are the high surface's: a tilted plane's normal everywhere.
@@ -218,7 +234,8 @@ TEST(Bake, SupersamplingAveragesOverTheTexel) {
 }
 
 // A cage leaning (0.02, 0, 0.05) away from a flat base: rays go toward it and stop at it,
-// so a layer beyond the cage is not found outward, and distances run along the leaning ray.
+// so a layer beyond the cage is not found outward; the values stay heights along the base
+// normal (they had been distances along the leaning ray, slant times too large).
 TEST(Bake, CageSetsTheRaysDirectionAndOutwardReach) {
   const Mesh base = test::make_grid(2, 2);
   Mesh cage = base;
@@ -231,9 +248,9 @@ TEST(Bake, CageSetsTheRaysDirectionAndOutwardReach) {
   o.cage = &cage;
   const BakeResult near = bake(base, make_layers({{0.01f, true}}), o);
   EXPECT_EQ(near.misses, 0u);
-  EXPECT_NEAR(near.displacement.at(4, 4), 0.01 * slant, 1e-5);
+  EXPECT_NEAR(near.displacement.at(4, 4), 0.01, 1e-6) << "along the ray it is " << 0.01 * slant;
   const BakeResult beyond = bake(base, make_layers({{0.06f, true}, {-0.03f, true}}), o);
-  EXPECT_NEAR(beyond.displacement.at(4, 4), -0.03 * slant, 1e-5) << "the layer beyond the cage is out of reach";
+  EXPECT_NEAR(beyond.displacement.at(4, 4), -0.03, 1e-6) << "the layer beyond the cage is out of reach";
   o.cage = nullptr;
   EXPECT_NEAR(bake(base, make_layers({{0.06f, true}, {-0.03f, true}}), o).displacement.at(4, 4), -0.03f, 1e-5f) << "nearest without cage";
   Mesh other = test::make_grid(3, 2);

@@ -61,7 +61,9 @@ struct BakeOptions {
   // A cage: a mesh with the base's topology (same vertices, same faces in the same order),
   // usually the base pushed outward. Each ray then leaves the base point toward the cage's
   // corresponding point, and reaches outward exactly to it (the cage bounds the search);
-  // inward it reaches `back`. Null: along the interpolated normal, `front` outward.
+  // inward it reaches `back`. The displacement stays the hit's height along the base normal
+  // (its distance along the ray times the cosine of the ray's lean). Null: along the
+  // interpolated normal, `front` outward.
   const Mesh* cage = nullptr;
   // Pair parts by name: a base part (face group) "wheel_low" only sees the high part(s)
   // "wheel_high", so rays never hit a neighbouring part. Names compare without case, a
