@@ -49,9 +49,13 @@ void measure(const Image& ref_uv, const Image& ref_lit, const Image& uv, const I
         squared += (va - vb) * (va - vb);
       }
     }
-  r.wrong_hit_fraction = r.pixels ? static_cast<double>(r.wrong_hits) / static_cast<double>(r.pixels) : 0.0;
-  r.rmse = r.pixels ? std::sqrt(squared / (3.0 * static_cast<double>(r.pixels))) : 0.0;
-  r.psnr = r.rmse > 0 ? 20.0 * std::log10(1.0 / r.rmse) : std::numeric_limits<double>::infinity();
+  // Nothing on the mesh in either image (the view misses it): nothing was measured, which is
+  // NaN (null in the JSON) rather than a perfect 0.
+  const double none = std::numeric_limits<double>::quiet_NaN();
+  r.wrong_hit_fraction = r.pixels ? static_cast<double>(r.wrong_hits) / static_cast<double>(r.pixels) : none;
+  r.rmse = r.pixels ? std::sqrt(squared / (3.0 * static_cast<double>(r.pixels))) : none;
+  r.psnr = !(r.rmse >= 0) ? none : r.rmse > 0 ? 20.0 * std::log10(1.0 / r.rmse) : std::numeric_limits<double>::infinity();
+  r.mean_iterations = r.p99_iterations = r.max_iterations = none;
   std::vector<float> counts;
   for (size_t i = 0; i < fetches.texel_count(); ++i)
     if (fetches.pixels[2 * i + 1] > 0.5f) counts.push_back(fetches.pixels[2 * i]);
@@ -108,7 +112,12 @@ Comparison compare_methods(const Mesh& base, const PreviewMaps& maps, const Comp
                      : o.view.shade == PreviewShade::lit ? c.reference_lit
                                                          : reference.render(o.view);
 
+  // Each method's maps tile or clamp as its own stream says (method_tiles). The reference above
+  // follows the methods without a stream, which tile when any stream does; a method whose
+  // stream clamps among streams that tile is measured against a clamping reference, rendered
+  // once from the maps without their streams.
   const bool wrap = maps_tile(maps);
+  Image clamped_uv, clamped_lit;
   HeadlessPreview gpu(base, maps);
   for (const auto& m : methods) {
     MethodComparison r;
@@ -121,8 +130,20 @@ Comparison compare_methods(const Mesh& base, const PreviewMaps& maps, const Comp
     mo.shade = PreviewShade::lit;
     const Image lit = gpu.render(mo);
     r.ms = gpu.time_draw(mo, o.repetitions);
-    measure(c.reference_uv, c.reference_lit, uv, lit, r.fetches, maps.displacement.width, maps.displacement.height, wrap,
-            o.uv_tolerance_texels, r);
+    const bool tiles = method_tiles(maps, m);
+    if (tiles != wrap && clamped_uv.empty()) {
+      PreviewMaps plain;
+      plain.displacement = maps.displacement;
+      plain.normal_ts = maps.normal_ts;
+      const ReferenceRenderer clamped(base, plain, o.reference);
+      PreviewOptions rv = o.view;
+      rv.shade = PreviewShade::uv;
+      clamped_uv = clamped.render(rv);
+      rv.shade = PreviewShade::lit;
+      clamped_lit = clamped.render(rv);
+    }
+    measure(tiles == wrap ? c.reference_uv : clamped_uv, tiles == wrap ? c.reference_lit : clamped_lit, uv, lit, r.fetches,
+            maps.displacement.width, maps.displacement.height, tiles, o.uv_tolerance_texels, r);
     c.methods.push_back(std::move(r));
   }
   return c;

@@ -1609,6 +1609,49 @@ TEST(Preview, ShadowsDarkenBehindABoxAndSoftOnesLieBetween) {
   EXPECT_GT(penumbra, 0u);
 }
 
+// Streams that disagree on the border: cone.exr made with --wrap, pyramid.exr with --clamp.
+// Each method is measured against a reference with its own border, so pyramid's figures do
+// not depend on which methods it is compared with (beside cone they had been measured against
+// the tiling reference the cone's stream asked for). The wrong hits left are at the quad's
+// outline, where the displaced sheet outgrows the base mesh.
+TEST(Measure, EachMethodAgainstAReferenceWithItsOwnBorder) {
+  const Mesh quad = test::make_grid(1, 1);
+  PreviewMaps maps = maps_with_height([](float u) { return 0.1f * u; });  // a cliff where it tiles
+  // 8 x 8 texels: the half texel at each edge, where the borders differ, spans 6 pixels.
+  Image coarse(8, 8, 1);
+  for (int y = 0; y < 8; ++y)
+    for (int x = 0; x < 8; ++x) coarse.at(x, y) = 0.1f * texel_center_u(x, 8);
+  maps.displacement = coarse;
+  const HeightField wrapped = make_height_field(maps.displacement, Border::wrap);
+  maps.cone = build_cone_map(wrapped, ConeMapOptions{});
+  maps.pyramid = pyramid_image(make_height_field(maps.displacement, Border::clamp));
+  CompareOptions o;
+  o.view.width = o.view.height = 96;
+  o.view.camera.view_angle = 0;
+  o.repetitions = 1;
+  o.methods = {"pyramid"};
+  PreviewMaps without_cone = maps;  // as `meso preview --compare --method pyramid` loads them
+  without_cone.cone = Image();
+  const MethodComparison alone = compare_methods(quad, without_cone, o).methods[0];
+  o.methods = {"pyramid", "cone"};
+  const Comparison both = compare_methods(quad, maps, o);
+  const MethodComparison& beside = both.methods[0];
+  EXPECT_EQ(beside.wrong_hits, alone.wrong_hits);
+  EXPECT_EQ(beside.rmse, alone.rmse);
+  EXPECT_EQ(beside.pixels, alone.pixels);
+  std::printf("pyramid alone: %zu wrong of %zu, rmse %.6g; beside cone: %zu, %.6g; cone: %zu, %.6g\n", alone.wrong_hits, alone.pixels,
+              alone.rmse, beside.wrong_hits, beside.rmse, both.methods[1].wrong_hits, both.methods[1].rmse);
+  // A view that misses the mesh measures nothing: null, not a perfect 0 (as it had been).
+  o.view.camera.pan_x = o.view.camera.pan_y = 50;
+  const Comparison away = compare_methods(quad, maps, o);
+  const auto json = nlohmann::json::parse(comparison_json(away));
+  for (size_t i = 0; i < 2; ++i) {
+    EXPECT_EQ(away.methods[i].pixels, 0u);
+    for (const char* key : {"wrong_hit_fraction", "rmse", "psnr", "mean_iterations", "p99_iterations", "max_iterations"})
+      EXPECT_TRUE(json["methods"][i][key].is_null()) << key << " " << json["methods"][i][key];
+  }
+}
+
 TEST(Measure, ComparisonReport) {
   const Mesh quad = test::make_grid(1, 1);
   PreviewMaps maps = maps_with_height([](float u) { return 0.1f * u; });

@@ -187,6 +187,12 @@ bool has_stream(const PreviewMaps& maps, const std::string& method) {
   return !image || !image->empty();
 }
 
+bool method_tiles(const PreviewMaps& maps, const std::string& method) {
+  const Image* own = method == "vdm" ? &maps.vdm_weights : image_stream(const_cast<PreviewMaps&>(maps), method);
+  if (own && !own->empty()) return string_attribute(*own, "border") == "wrap";
+  return maps_tile(maps);
+}
+
 void clear_stream(PreviewMaps& maps, const std::string& method) {
   if (method == "vdm") maps.vdm_weights = maps.vdm_basis = Image();
   if (method == "dstream") maps.dstream = EncodedStream();

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 namespace meso {
 
@@ -12,6 +13,9 @@ namespace meso {
 // reads no stream: when any loaded stream was made with border wrap (SurfaceRenderer::draw's
 // rule; a method with a stream follows its own stream's border).
 bool maps_tile(const PreviewMaps& maps);
+// Whether they repeat for `method`: its own stream's border when it reads one (sdf, cone,
+// relaxed-cone, pyramid, vdm), else maps_tile. The same rule as SurfaceRenderer::draw.
+bool method_tiles(const PreviewMaps& maps, const std::string& method);
 
 // The texel that integer position k (a texel centre's coordinate, possibly outside the map)
 // reads on an n-texel axis: the map tiled (wrap) or its edge texel repeated (clamp).

@@ -303,9 +303,10 @@ struct MethodComparison {
   // Of the lit images over the same pixels (a pixel off one image counts with that image's
   // transparent black), RGB, on the sRGB-encoded values in [0, 1] (1 = 255 in the PNG),
   // unquantised; psnr = 20 log10(1 / rmse) dB, infinite when the images are equal.
+  // NaN (wrong_hit_fraction too) when `pixels` is 0: nothing was measured.
   double rmse = 0, psnr = 0;
   // Texture fetches per pixel on the method's mesh pixels (HeadlessPreview::render's
-  // `fetches`): mean and 99th percentile (nearest rank).
+  // `fetches`): mean and 99th percentile (nearest rank); NaN when the method covers no pixel.
   double mean_iterations = 0, p99_iterations = 0;
   double max_iterations = 0;
   double ms = 0;  // HeadlessPreview::time_draw of the lit frame
