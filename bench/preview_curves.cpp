@@ -641,18 +641,9 @@ void measure(const Image& ref_uv, const Image& ref_lit, const Image& uv, const I
   r.wrong_hit_fraction = r.pixels ? static_cast<double>(r.wrong_hits) / static_cast<double>(r.pixels) : 0.0;
   r.rmse = r.pixels ? std::sqrt(squared / (3.0 * static_cast<double>(r.pixels))) : 0.0;
   r.psnr = r.rmse > 0 ? 20.0 * std::log10(1.0 / r.rmse) : std::numeric_limits<double>::infinity();
-  std::vector<float> counts;
-  for (size_t i = 0; i < fetches.texel_count(); ++i)
-    if (fetches.pixels[2 * i + 1] > 0.5f) counts.push_back(fetches.pixels[2 * i]);
-  if (!counts.empty()) {
-    std::sort(counts.begin(), counts.end());
-    double sum = 0;
-    for (float c : counts) sum += c;
-    r.mean_iterations = sum / static_cast<double>(counts.size());
-    const size_t rank = static_cast<size_t>(std::ceil(0.99 * static_cast<double>(counts.size())));
-    r.p99_iterations = counts[std::max<size_t>(rank, 1) - 1];
-    r.max_iterations = counts.back();
-    double waited = 0;
+  fetch_statistics(fetches, r);  // the same figures as meso preview --compare
+  if (!std::isnan(r.mean_iterations)) {
+    double waited = 0, covered_pixels = 0;
     for (int ty = 0; ty < fetches.height; ty += kWarpHeight)
       for (int tx = 0; tx < fetches.width; tx += kWarpWidth) {
         float most = 0;
@@ -664,8 +655,9 @@ void measure(const Image& ref_uv, const Image& ref_lit, const Image& uv, const I
               ++lanes;
             }
         waited += static_cast<double>(most) * static_cast<double>(lanes);
+        covered_pixels += static_cast<double>(lanes);
       }
-    p.warp_fetches = waited / static_cast<double>(counts.size());
+    p.warp_fetches = waited / covered_pixels;
   }
 }
 

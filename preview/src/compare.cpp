@@ -55,19 +55,7 @@ void measure(const Image& ref_uv, const Image& ref_lit, const Image& uv, const I
   r.wrong_hit_fraction = r.pixels ? static_cast<double>(r.wrong_hits) / static_cast<double>(r.pixels) : none;
   r.rmse = r.pixels ? std::sqrt(squared / (3.0 * static_cast<double>(r.pixels))) : none;
   r.psnr = !(r.rmse >= 0) ? none : r.rmse > 0 ? 20.0 * std::log10(1.0 / r.rmse) : std::numeric_limits<double>::infinity();
-  r.mean_iterations = r.p99_iterations = r.max_iterations = none;
-  std::vector<float> counts;
-  for (size_t i = 0; i < fetches.texel_count(); ++i)
-    if (fetches.pixels[2 * i + 1] > 0.5f) counts.push_back(fetches.pixels[2 * i]);
-  if (!counts.empty()) {
-    std::sort(counts.begin(), counts.end());
-    double sum = 0;
-    for (float c : counts) sum += c;
-    r.mean_iterations = sum / static_cast<double>(counts.size());
-    const size_t rank = static_cast<size_t>(std::ceil(0.99 * static_cast<double>(counts.size())));
-    r.p99_iterations = counts[std::max<size_t>(rank, 1) - 1];
-    r.max_iterations = counts.back();
-  }
+  fetch_statistics(fetches, r);
 }
 
 std::string number(double v) {
@@ -78,6 +66,21 @@ std::string number(double v) {
 }
 
 }  // namespace
+
+void fetch_statistics(const Image& fetches, MethodComparison& r) {
+  r.mean_iterations = r.p99_iterations = r.max_iterations = std::numeric_limits<double>::quiet_NaN();
+  std::vector<float> counts;
+  for (size_t i = 0; i < fetches.texel_count(); ++i)
+    if (fetches.pixels[2 * i + 1] > 0.5f) counts.push_back(fetches.pixels[2 * i]);
+  if (counts.empty()) return;
+  std::sort(counts.begin(), counts.end());
+  double sum = 0;
+  for (float c : counts) sum += c;
+  r.mean_iterations = sum / static_cast<double>(counts.size());
+  const size_t rank = static_cast<size_t>(std::ceil(0.99 * static_cast<double>(counts.size())));
+  r.p99_iterations = counts[std::max<size_t>(rank, 1) - 1];
+  r.max_iterations = counts.back();
+}
 
 Comparison compare_methods(const Mesh& base, const PreviewMaps& maps, const CompareOptions& o) {
   std::vector<std::string> methods = o.methods;

@@ -337,8 +337,13 @@ Comparison compare_methods(const Mesh& base, const PreviewMaps& maps, const Comp
 //    "width", "height", "view_angle", "azimuth", "zoom", "iterations", "uv_tolerance_texels",
 //    "methods": [{"name", "pixels", "wrong_hit_fraction", "rmse", "psnr", "mean_iterations",
 //                 "p99_iterations", "max_iterations", "ms"}, ...]}
-// psnr is null when infinite.
+// NaN and infinite figures are null.
 std::string comparison_json(const Comparison& comparison);
+
+// The fetch statistics of MethodComparison from HeadlessPreview::render's `fetches`: mean,
+// 99th percentile (nearest rank: the ceil(0.99 n)-th smallest) and maximum over the pixels
+// the method covers; NaN when it covers none.
+void fetch_statistics(const Image& fetches, MethodComparison& r);
 
 // A colour picture of fetch counts (HeadlessPreview::render's `fetches`): RGBA, the viridis
 // ramp (dark blue 0, green, yellow at `max_fetches` and above) over
