@@ -71,6 +71,8 @@ void add_streams(CLI::App& app, Context& ctx) {
       p.levels[0].metadata = height_field_metadata(field);
       p.levels[0].metadata["quantity"] = std::string("min-max pyramid");
       p.levels[0].metadata["channels"] = std::string("R = minimum, G = maximum of the bilinear height surface over each texel");
+      if (args->half)
+        for (Image& level : p.levels) round_min_max_to_half(level);  // still conservative in half
       OutputSet outputs;
       write_image_levels(p.levels, outputs.add(args->output), args->half ? PixelFormat::half : PixelFormat::float32);
       outputs.commit();
@@ -109,6 +111,7 @@ void add_streams(CLI::App& app, Context& ctx) {
       m.metadata["quantity"] = std::string("dilation-erosion");
       m.metadata["channels"] = std::string("R = erosion (minimum), G = dilation (maximum) of the bilinear height surface over the neighbourhood");
       m.metadata["radius_texels"] = *de_radius;
+      if (de_args->half) round_min_max_to_half(m);  // still conservative in half
       OutputSet outputs;
       write_image(m, outputs.add(de_args->output), de_args->half ? PixelFormat::half : PixelFormat::float32);
       outputs.commit();

@@ -2,6 +2,7 @@
 
 #include "meso/streams/cone_map.hpp"
 
+#include <Imath/half.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -175,6 +176,26 @@ struct PyramidTracer {
 };
 
 }  // namespace
+
+void round_min_max_to_half(Image& min_max) {
+  // One half ulp toward -inf (down) or +inf (up) from h, for finite h.
+  auto step = [](Imath::half h, bool up) {
+    const bool zero = h.bits() == 0x0000 || h.bits() == 0x8000, negative = (h.bits() & 0x8000) != 0;
+    Imath::half r;
+    r.setBits(zero ? static_cast<unsigned short>(up ? 0x0001 : 0x8001)  // +-0: the smallest subnormal
+                   : static_cast<unsigned short>(h.bits() + (up != negative ? 1 : -1)));
+    return r;
+  };
+  const int channels = std::min(2, min_max.channels);
+  for (size_t i = 0; i < min_max.texel_count(); ++i)
+    for (int c = 0; c < channels; ++c) {
+      float& v = min_max.pixels[i * static_cast<size_t>(min_max.channels) + static_cast<size_t>(c)];
+      Imath::half h(v);  // to nearest
+      if (c == 0 && static_cast<float>(h) > v) h = step(h, false);
+      if (c == 1 && static_cast<float>(h) < v) h = step(h, true);
+      v = static_cast<float>(h);
+    }
+}
 
 HeightHit trace_min_max_pyramid(const HeightField& field, const MinMaxPyramid& pyramid, const HeightRay& r) {
   HeightHit out;

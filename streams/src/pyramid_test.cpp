@@ -2,6 +2,8 @@
 
 #include "test_fields.hpp"
 
+#include <Imath/half.h>
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -151,6 +153,35 @@ INSTANTIATE_TEST_SUITE_P(Sizes, PyramidBounds,
                                            PyramidCase{32, 32, Border::wrap, PyramidMap::one},
                                            PyramidCase{64, 64, Border::clamp, PyramidMap::one}),
                          pyramid_case_name);
+
+}  // namespace
+}  // namespace meso
+
+namespace meso {
+namespace {
+
+// --half: minima round down and maxima up to half values (the writer rounds to nearest,
+// which had stored a maximum of 1/3 as 0.333252, under the surface), exactly representable so
+// the file holds them as they are.
+TEST(Pyramid, HalfRoundingStaysConservative) {
+  Image m(4, 1, 2);
+  const float values[4] = {1.0f / 3.0f, 0.6f, 0.0f, 1.0f};
+  for (int x = 0; x < 4; ++x) m.at(x, 0, 0) = m.at(x, 0, 1) = values[x];
+  Image rounded = m;
+  round_min_max_to_half(rounded);
+  for (int x = 0; x < 4; ++x) {
+    const float lo = rounded.at(x, 0, 0), hi = rounded.at(x, 0, 1);
+    EXPECT_LE(lo, values[x]) << x;
+    EXPECT_GE(hi, values[x]) << x;
+    EXPECT_EQ(static_cast<float>(Imath::half(lo)), lo) << x;
+    EXPECT_EQ(static_cast<float>(Imath::half(hi)), hi) << x;
+    EXPECT_LT(hi - lo, 1e-3f) << x;
+  }
+  EXPECT_EQ(rounded.at(2, 0, 0), 0.0f);
+  EXPECT_EQ(rounded.at(3, 0, 1), 1.0f) << "exact values stay";
+  EXPECT_GT(static_cast<float>(Imath::half(1.0f / 3.0f)), 0.0f);
+  EXPECT_LT(static_cast<float>(Imath::half(1.0f / 3.0f)), 1.0f / 3.0f) << "to nearest is below 1/3: the case this guards";
+}
 
 }  // namespace
 }  // namespace meso

@@ -33,6 +33,12 @@ MinMaxPyramid min_max_pyramid_from_level0(Image level0);
 // surface over the texel's footprint.
 Image footprint_min_max(const HeightField& field);
 
+// Rounds a min-max image (channel 0 = minimum, channel 1 = maximum, as the pyramid's levels
+// and dilation_erosion's map) outward to values a half float holds: minima down, maxima up,
+// so that a file written with --half stays conservative (writing rounds to nearest, which put
+// a maximum of 1/3 at 0.333252, under the surface).
+void round_min_max_to_half(Image& min_max);
+
 // Reference CPU tracer of the max pyramid (pyramidal displacement mapping, survey 4.3.3):
 // descends the quadtree front to back along the ray, skipping every texel whose box
 // [footprint] x [0, max] the ray misses, and intersects S exactly inside level-0 footprints
