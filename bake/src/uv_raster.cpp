@@ -14,7 +14,7 @@ namespace meso {
 UvRasterizer::UvRasterizer(const Mesh& mesh, int width, int height) : width_(width), height_(height) {
   for (auto f : mesh.faces()) {
     // A face with no UV area covers nothing (the same rule as uvpack's degenerate faces).
-    if (uv_double_area(mesh, f) == 0.0f) continue;
+    if (uv_double_area(mesh, f) == 0.0) continue;
     const UvTriangle t = uv_triangle_in_pixels(mesh, f, width, height);
     Face face{};
     face.index = f.idx();

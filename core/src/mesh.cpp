@@ -116,10 +116,15 @@ std::vector<uint8_t> uv_seam_vertices(const Mesh& mesh) {
   return seam;
 }
 
-float uv_double_area(const Mesh& mesh, FaceHandle f) {
+double uv_double_area(const Mesh& mesh, FaceHandle f) {
   const auto hs = face_halfedges(mesh, f);
   const Vec2f a = mesh.texcoord2D(hs[0]), b = mesh.texcoord2D(hs[1]), c = mesh.texcoord2D(hs[2]);
-  return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+  // Differences of floats are exact in double (for exponents less than 29 apart: any UVs
+  // of one chart); then p q - r s with the rounding of r s put back (Kahan).
+  const double p = static_cast<double>(b[0]) - a[0], q = static_cast<double>(c[1]) - a[1];
+  const double r = static_cast<double>(b[1]) - a[1], s = static_cast<double>(c[0]) - a[0];
+  const double rs = r * s;
+  return std::fma(p, q, -rs) - std::fma(r, s, -rs);
 }
 
 double face_area(const Mesh& mesh, FaceHandle f) {

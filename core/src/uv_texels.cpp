@@ -16,8 +16,8 @@ UvTriangle uv_triangle_in_pixels(const Mesh& mesh, FaceHandle f, int width, int 
   return t;
 }
 
-bool triangle_overlaps_texel(const UvTriangle& t, int x, int y) {
-  const double x0 = x, y0 = y, x1 = x + 1.0, y1 = y + 1.0;
+bool triangle_overlaps_texel(const UvTriangle& t, int x, int y, double grow) {
+  const double x0 = x - grow, y0 = y - grow, x1 = x + 1.0 + grow, y1 = y + 1.0 + grow;
   const double* px = t.px;
   const double* py = t.py;
   if (std::max({px[0], px[1], px[2]}) <= x0 || std::min({px[0], px[1], px[2]}) >= x1) return false;

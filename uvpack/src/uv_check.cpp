@@ -117,7 +117,7 @@ UvCheckReport check_uv_mapping(const Mesh& mesh, const UvCheckOptions& o) {
       outside |= t[0] < 0 || t[0] > 1 || t[1] < 0 || t[1] > 1;
     }
     if (outside) r.outside_faces.push_back(f.idx());
-    if (uv_double_area(mesh, f) == 0.0f) {
+    if (uv_double_area(mesh, f) == 0.0) {
       r.degenerate_faces.push_back(f.idx());
       continue;
     }
@@ -128,7 +128,7 @@ UvCheckReport check_uv_mapping(const Mesh& mesh, const UvCheckOptions& o) {
     });
   }
   for (auto f : mesh.faces()) {
-    if (uv_double_area(mesh, f) == 0.0f) continue;
+    if (uv_double_area(mesh, f) == 0.0) continue;
     bool shares = false;
     for_each_touched(f, [&](size_t i) { shares |= shared[i] != 0; });
     if (shares) r.shared_texel_faces.push_back(f.idx());

@@ -18,7 +18,7 @@ std::vector<ChartDetail> measure_chart_detail(const Mesh& mesh, const Image& map
   constexpr int kShared = -2;
   std::vector<int> owner(static_cast<size_t>(w) * static_cast<size_t>(h), -1);
   for (auto f : mesh.faces()) {
-    if (uv_double_area(mesh, f) == 0.0f) continue;
+    if (uv_double_area(mesh, f) == 0.0) continue;
     const int c = chart_of[static_cast<size_t>(f.idx())];
     for_each_touched_texel(uv_triangle_in_pixels(mesh, f, w, h), w, h, [&](int x, int y) {
       int& o = owner[static_cast<size_t>(y) * static_cast<size_t>(w) + static_cast<size_t>(x)];

@@ -84,7 +84,7 @@ UvOverlapReport find_uv_overlaps(const Mesh& mesh, const std::vector<int>& chart
   // Boxes grown by half the padding (in UV units), so charts closer than it meet.
   const double grow = padding_texels > 0 ? 0.5 * padding_texels / size : 0.0;
   for (auto f : mesh.faces()) {
-    if (uv_double_area(mesh, f) == 0.0f) continue;
+    if (uv_double_area(mesh, f) == 0.0) continue;
     const size_t i = static_cast<size_t>(f.idx());
     tri[i] = uv_points(mesh, f);
     const CGAL::Bbox_2 b = tri[i][0].bbox() + tri[i][1].bbox() + tri[i][2].bbox();

@@ -131,6 +131,14 @@ Frame min_area_frame(const Chart& c) {
 // otherwise touch the neighbouring texel once the new UVs are rounded to float.
 constexpr double kInset = 1.0 / 64;
 
+// How far, in texels, rounding a written UV to float can move a corner in an atlas of n
+// texels: half a float ulp of a value below 1 is at most 2^-25, n 2^-25 texels; twice that
+// for margin. Footprints are rasterised with texels grown by it (triangle_overlaps_texel), so
+// the texels the written, rounded triangles touch are within them: a chart edge a hair short
+// of a texel line, pushed across it by the rounding, had shared that texel with the next
+// chart at --padding 0. Below kInset for every atlas size allowed (16384: 0.002 texels).
+double rounding_margin(double n) { return n * 0x1p-24; }
+
 // Free texels kept between two charts' touched texels: the padding, at least 2 with mip_safe
 // (level 0's share of the per-level gaps, see pack_uv_charts in the header).
 int chart_gap(const UvPackOptions& o) { return o.mip_safe >= 0 ? std::max(2, o.padding) : std::max(0, o.padding); }
@@ -152,13 +160,13 @@ struct Footprint {
 // triangle's touched texels in a row are consecutive, so they are gathered as spans (one per
 // triangle and row, split where a texel is skipped), then merged row by row: the work is per
 // span, not per texel of the box.
-Footprint footprint(const Chart& c, double s, int r) {
+Footprint footprint(const Chart& c, double s, int r, double grow) {
   Footprint out;
   s *= c.factor;
   const Frame& f = c.frames[static_cast<size_t>(r >> 2)];
   const double w = (r & 1) ? f.h : f.w, h = (r & 1) ? f.w : f.h;
-  out.bw = static_cast<int>(std::floor(w * s + kInset)) + 1;
-  out.bh = static_cast<int>(std::floor(h * s + kInset)) + 1;
+  out.bw = static_cast<int>(std::floor(w * s + kInset + grow)) + 1;
+  out.bh = static_cast<int>(std::floor(h * s + kInset + grow)) + 1;
   std::vector<std::array<int, 3>> spans;
   for (const auto& t : c.tris) {
     UvTriangle tri{};
@@ -170,14 +178,15 @@ Footprint footprint(const Chart& c, double s, int r) {
     const double area = (tri.px[1] - tri.px[0]) * (tri.py[2] - tri.py[0]) - (tri.py[1] - tri.py[0]) * (tri.px[2] - tri.px[0]);
     if (area == 0) continue;
     std::array<int, 3> span{-1, 0, -1};
-    for_each_touched_texel(tri, out.bw, out.bh, [&](int x, int y) {
+    const auto gather = [&](int x, int y) {
       if (y == span[0] && x == span[2] + 1) {
         span[2] = x;
         return;
       }
       if (span[0] >= 0) spans.push_back(span);
       span = {y, x, x};
-    });
+    };
+    for_each_touched_texel(tri, out.bw, out.bh, gather, 0, 1 << 30, grow);
     if (span[0] >= 0) spans.push_back(span);
   }
   std::sort(spans.begin(), spans.end());
@@ -204,13 +213,13 @@ using Footprints = std::vector<std::array<Footprint, kMaxOrientations>>;
 
 // Every chart's footprints at scale s, computed in parallel (each chart on its own: the
 // result does not depend on the split).
-Footprints footprints_at(const std::vector<Chart>& charts, double s, int turns) {
+Footprints footprints_at(const std::vector<Chart>& charts, double s, int turns, double grow) {
   Footprints out(charts.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, charts.size()), [&](const tbb::blocked_range<size_t>& range) {
     for (size_t c = range.begin(); c < range.end(); ++c)
       for (int i = 0; i < orientation_count(charts[c], turns); ++i) {
         const int r = orientation_at(i, turns);
-        out[c][static_cast<size_t>(r)] = footprint(charts[c], s, r);
+        out[c][static_cast<size_t>(r)] = footprint(charts[c], s, r, grow);
       }
   });
   return out;
@@ -685,7 +694,7 @@ UvPackReport pack_uv_charts(Mesh& mesh, const UvPackOptions& o) {
     }
     for (int k = 0; k < 60; ++k) {
       ++report.attempts;
-      Attempt a = place_all(charts, footprints_at(charts, s, turns), orders[0], false, o, turns);
+      Attempt a = place_all(charts, footprints_at(charts, s, turns, rounding_margin(n)), orders[0], false, o, turns);
       const double aim = a.ok ? s / std::sqrt(std::max(a.fill, 1e-9)) : s * std::clamp(std::sqrt(a.fill), 0.5, 0.95);
       if (a.ok) {
         ok = s;
@@ -722,7 +731,7 @@ UvPackReport pack_uv_charts(Mesh& mesh, const UvPackOptions& o) {
     size_t first = 0;
     while (budget > 0) {
       const double target = ok * step;
-      const Footprints prints = footprints_at(charts, target, turns);
+      const Footprints prints = footprints_at(charts, target, turns, rounding_margin(n));
       bool rose = false;
       for (size_t j = 0; j < variants && budget > 0; ++j) {
         const size_t v = (first + j) % variants;

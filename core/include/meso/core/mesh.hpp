@@ -100,8 +100,11 @@ inline OpenMesh::Vec3d any_perpendicular(const OpenMesh::Vec3d& n) {
   return OpenMesh::Vec3d(1.0 + s * n[0] * n[0] * a, s * b, -s * n[0]);
 }
 
-// The UV-space signed double area of a face (positive for counter-clockwise UVs).
-float uv_double_area(const Mesh& mesh, FaceHandle f);
+// The UV-space signed double area of a face (positive for counter-clockwise UVs), computed
+// in double with Kahan's 2x2 determinant (an FMA recovers the first product's rounding): its
+// sign is right and it is 0 only for collinear UVs, where float arithmetic rounded slivers
+// that do cover texels to 0 (and the UV checker and the baker then skipped them).
+double uv_double_area(const Mesh& mesh, FaceHandle f);
 
 // The surface area of a face in object units squared, computed in double: a float cross
 // product overflows for edges past ~1e19 and its squared norm for edges past ~1e9, and

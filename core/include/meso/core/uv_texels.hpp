@@ -20,16 +20,20 @@ UvTriangle uv_triangle_in_pixels(const Mesh& mesh, FaceHandle f, int width, int 
 
 // Whether the triangle and texel (x, y) share interior points. Separating-axis test; a
 // degenerate triangle touches none. (Bilinear lookups inside the triangle also read the
-// ring of texels around the touched ones: see uv_check.hpp on padding.)
-bool triangle_overlaps_texel(const UvTriangle& t, int x, int y);
+// ring of texels around the touched ones: see uv_check.hpp on padding.) With grow > 0 the
+// texel's square is taken `grow` pixels larger on every side, [x - grow, x + 1 + grow]: then
+// it also holds every texel a non-degenerate triangle could touch once its corners move by up
+// to `grow` in x and y (the moved triangle stays within that distance of the original, per
+// axis), as rounding the corners to float does.
+bool triangle_overlaps_texel(const UvTriangle& t, int x, int y, double grow = 0);
 
 // Calls fn(x, y) for every texel of a width x height grid the triangle touches, row by row;
-// only rows [row0, row1) when given.
+// only rows [row0, row1) when given. `grow` (below 1) as triangle_overlaps_texel's.
 template <class Fn>
-void for_each_touched_texel(const UvTriangle& t, int width, int height, Fn&& fn, int row0 = 0, int row1 = 1 << 30) {
+void for_each_touched_texel(const UvTriangle& t, int width, int height, Fn&& fn, int row0 = 0, int row1 = 1 << 30, double grow = 0) {
   int x0, x1, y0, y1;
-  if (!texels_touching(std::min({t.px[0], t.px[1], t.px[2]}), std::max({t.px[0], t.px[1], t.px[2]}), width, x0, x1)) return;
-  if (!texels_touching(std::min({t.py[0], t.py[1], t.py[2]}), std::max({t.py[0], t.py[1], t.py[2]}), height, y0, y1)) return;
+  if (!texels_touching(std::min({t.px[0], t.px[1], t.px[2]}) - grow, std::max({t.px[0], t.px[1], t.px[2]}) + grow, width, x0, x1)) return;
+  if (!texels_touching(std::min({t.py[0], t.py[1], t.py[2]}) - grow, std::max({t.py[0], t.py[1], t.py[2]}) + grow, height, y0, y1)) return;
   y0 = std::max(y0, row0);
   y1 = std::min(y1, row1 - 1);
   // A degenerate triangle touches nothing: the separating-axis test rejects every texel when
@@ -40,8 +44,9 @@ void for_each_touched_texel(const UvTriangle& t, int width, int height, Fn&& fn,
   }
   const double ymin = std::min({t.py[0], t.py[1], t.py[2]}), ymax = std::max({t.py[0], t.py[1], t.py[2]});
   for (int y = y0; y <= y1; ++y) {
-    if (ymax <= y || ymin >= y + 1.0) continue;  // as the test's first rejection
-    // The triangle's x-extent [a, b] within the row's strip [y, y+1]. The triangle's interior
+    const double strip0 = y - grow, strip1 = y + 1.0 + grow;  // the row's (grown) squares
+    if (ymax <= strip0 || ymin >= strip1) continue;  // as the test's first rejection
+    // The triangle's x-extent [a, b] within the row's strip [y, y+1] (grown). Its interior
     // inside the open strip is convex with that x-projection, so a texel whose x-interval lies
     // strictly inside it is touched, and one wholly outside it is not. Texels more than one
     // texel inside are reported without a test, those more than one outside skipped (the
@@ -50,13 +55,13 @@ void for_each_touched_texel(const UvTriangle& t, int width, int height, Fn&& fn,
     double a = INFINITY, b = -INFINITY;
     for (int i = 0; i < 3; ++i) {
       const int j = (i + 1) % 3;
-      if (t.py[i] >= y && t.py[i] <= y + 1.0) {
+      if (t.py[i] >= strip0 && t.py[i] <= strip1) {
         a = std::min(a, t.px[i]);
         b = std::max(b, t.px[i]);
       }
       const double dy = t.py[j] - t.py[i];
       if (dy == 0) continue;
-      for (const double line : {double(y), y + 1.0}) {
+      for (const double line : {strip0, strip1}) {
         const double s = (line - t.py[i]) / dy;
         if (s < 0 || s > 1) continue;
         const double x = t.px[i] + s * (t.px[j] - t.px[i]);
@@ -66,13 +71,18 @@ void for_each_touched_texel(const UvTriangle& t, int width, int height, Fn&& fn,
     }
     int lo = x0, hi = x1, sure0 = 1, sure1 = 0;
     if (a < b) {
-      lo = std::max(x0, static_cast<int>(std::floor(a)) - 1);
-      hi = std::min(x1, static_cast<int>(std::ceil(b)));
-      sure0 = static_cast<int>(std::floor(a)) + 2;
-      sure1 = static_cast<int>(std::ceil(b)) - 3;
+      // Clamped near the texel range in double before converting: a corner 2^31 texels out
+      // would overflow int (the row had then touched nothing). The clamp changes no result:
+      // a below x0 - 2 leaves every texel from x0 on past the margin, as x0 - 2 does.
+      const int fa = static_cast<int>(std::clamp(std::floor(a), x0 - 2.0, x1 + 2.0));
+      const int cb = static_cast<int>(std::clamp(std::ceil(b), x0 - 2.0, x1 + 3.0));
+      lo = std::max(x0, fa - 1);
+      hi = std::min(x1, cb);
+      sure0 = fa + 2;
+      sure1 = cb - 3;
     }
     for (int x = lo; x <= hi; ++x)
-      if ((x >= sure0 && x <= sure1) || triangle_overlaps_texel(t, x, y)) fn(x, y);
+      if ((x >= sure0 && x <= sure1) || triangle_overlaps_texel(t, x, y, grow)) fn(x, y);
   }
 }
 

@@ -52,8 +52,8 @@ struct UvPackReport {
 // orientation, or of the chart's minimum-area orientation: min_area_orientation), one common
 // scale (relative chart sizes are kept, or changed by exactly chart_scale), translation to
 // integer texel offsets. Guarantees,
-// at options.size: no texel is touched (conservatively: the triangle meets its square) by
-// two charts, and touched texels of different charts are at least `padding` texels apart
+// at options.size, for the UVs as written (rounded to float): no texel is touched
+// (conservatively: the triangle meets its square) by two charts, and touched texels of different charts are at least `padding` texels apart
 // (Chebyshev, hence also Euclidean) and, with wrap, at least ceil(padding / 2) from the atlas
 // border (atlas_border_margin), so also `padding` apart across it. The
 // scale is one at which the greedy placement succeeds, within the quality's tolerance of one at
