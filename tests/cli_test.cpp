@@ -191,6 +191,7 @@ TEST(Cli, BadUsageExitsTwo) {
   // Finite as doubles but not as floats: they became inf in metadata, null in JSON, or NaN maps.
   EXPECT_EQ(run("streams sdf h.exr -o s.exr --relief 1e39").code, 2);
   EXPECT_EQ(run("streams vdm h.exr -o v.exr --relief 1e39").code, 2);
+  EXPECT_EQ(run("streams vdm h.exr -o v.exr --relief 1e6").code, 2) << "beyond 1000: a tiling map's rays walked for minutes";
   EXPECT_EQ(run("streams vdm h.exr -o v.exr --curvatures 0,0").code, 2) << "curvatures must increase strictly";
   EXPECT_EQ(run("streams dstream --low a.obj --high b.obj -o d.bin --front 1e39").code, 2);
   EXPECT_EQ(run("streams cone h.exr -o c.exr --tolerance nan").code, 2);
@@ -1068,6 +1069,10 @@ TEST(Cli, FramesWritesACurvatureMap) {
   EXPECT_EQ(report["curvature_map"]["height"], 32);
   EXPECT_EQ(report["curvature_map"]["texels"], 64 * 32) << "the UVs cover the whole map";
   EXPECT_NEAR(report["curvature_map"]["max"].get<double>(), 1 / r, 0.05 / r);
+  // The vertices' range: a sphere bends one way, so both ends are near 1/r (the minimum had
+  // started at 0 and stayed there).
+  EXPECT_GT(report["curvature"]["min"].get<double>(), 0.5 / r);
+  EXPECT_LT(report["curvature"]["max"].get<double>(), 2 / r);
 
   for (const std::string bad : {"--size 0", "--size 64y32", "--size x", "--size 40000"}) {
     const Result r2 = run("frames " + in + " -o " + (d / "bad.glb").string() + " --curvature-map " + (d / "bad.exr").string() + " " + bad);

@@ -9,6 +9,7 @@
 #include "meso/formats/mesh_io.hpp"
 
 #include <algorithm>
+#include <limits>
 #include <cctype>
 #include <filesystem>
 
@@ -55,14 +56,19 @@ void add_frames(CLI::App& app, Context& ctx) {
       const auto curvature = fit_curvature(mesh);
       store_curvature(mesh, curvature);
       size_t unfit = 0, two_ring = 0, three_ring = 0;
-      float k_lo = 0, k_hi = 0;
+      // Over the fitted vertices only: the unfit ones hold a 0 that is no measurement (a
+      // sphere's range had read [0, 1/r]).
+      float k_lo = std::numeric_limits<float>::infinity(), k_hi = -k_lo;
       for (const auto& c : curvature) {
         unfit += c.rings == 0;
         two_ring += c.rings == 2;
         three_ring += c.rings == 3;
+        if (c.rings == 0) continue;
         k_lo = std::min(k_lo, c.k2);
         k_hi = std::max(k_hi, c.k1);
       }
+      const nlohmann::json k_min = k_lo <= k_hi ? nlohmann::json(k_lo) : nlohmann::json(nullptr);
+      const nlohmann::json k_max = k_lo <= k_hi ? nlohmann::json(k_hi) : nlohmann::json(nullptr);
       if (unfit) warn(ctx.globals, args->input + ": " + std::to_string(unfit) + " vertices have too few neighbours for a curvature fit (set to 0)");
       size_t mirrored = 0;
       for (auto h : mesh.halfedges())
@@ -83,7 +89,7 @@ void add_frames(CLI::App& app, Context& ctx) {
                 {"input", in_report},
                 {"output", args->output},
                 {"mirrored_corners", mirrored},
-                {"curvature", {{"min", k_lo}, {"max", k_hi}, {"two_ring_vertices", two_ring}, {"three_ring_vertices", three_ring}, {"unfit_vertices", unfit}}}};
+                {"curvature", {{"min", k_min}, {"max", k_max}, {"two_ring_vertices", two_ring}, {"three_ring_vertices", three_ring}, {"unfit_vertices", unfit}}}};
       if (want_map)
         report["curvature_map"] = {{"output", args->curvature_map},
                                    {"width", map_options.width},

@@ -12,6 +12,7 @@
 #include "meso/bake/displacement_stream.hpp"
 
 #include <algorithm>
+#include <limits>
 #include <chrono>
 #include <functional>
 #include <cstdio>
@@ -23,6 +24,10 @@
 namespace meso::cli {
 
 namespace {
+
+// The largest --relief of streams vdm, in units of u: a height range a thousand times the
+// map's width is no displacement map.
+constexpr double kVdmMaxRelief = 1000;
 
 // What every stream subcommand takes: the height map, the output, the border rule, precision.
 struct StreamArgs {
@@ -209,7 +214,9 @@ void add_streams(CLI::App& app, Context& ctx) {
   vdm_cmd->add_option("--curvatures", vdm->curvatures, "Comma-separated curvatures along the view direction, per unit of u, increasing (default: 0, a flat base; with --mesh: from the mesh)");
   vdm_cmd->add_option("--mesh", vdm->mesh, "Base mesh: relief from its size (unless --relief) and curvature slices from quadric fits (unless --curvatures)");
   vdm_cmd->add_option("--curvature-steps", vdm->curvature_steps, "With --mesh: curvature samples over the mesh's range (5th percentile of k2 to 95th of k1; 1: the median mean curvature)")->check(CLI::Range(1, 64))->capture_default_str();
-  vdm_cmd->add_option("--relief", vdm->options.relief, "Height range in units of u (default 0.1, or from --mesh)")->check(InRange(1e-9, 1e9));
+  // Capped: a ray at the largest view angle crosses up to relief * tan(theta) tiles of a
+  // tiling map before it must meet S, each walked; at 1e6 a noise map took minutes.
+  vdm_cmd->add_option("--relief", vdm->options.relief, "Height range in units of u (default 0.1, or from --mesh)")->check(InRange(1e-9, kVdmMaxRelief));
   vdm_cmd->add_option("--max-error", vdm->max_error, "Largest RMS error of the compressed table, units of u")->check(NonNegative)->capture_default_str();
   vdm_cmd->add_option("--max-rank", vdm->max_rank, "Largest number of PCA components")->check(CLI::Range(0, 4096))->capture_default_str();
   vdm_cmd->callback([&ctx, vdm_args, vdm, vdm_cmd] {
@@ -239,7 +246,7 @@ void add_streams(CLI::App& app, Context& ctx) {
         if (!(per_u > 0)) throw InputError(vdm->mesh, "has no area in 3D or in UV");
         const std::vector<VertexCurvature> k = vdm->curvatures.empty() ? fit_curvature(base) : std::vector<VertexCurvature>{};
         std::vector<float> k1, k2;
-        double lo = 0, hi = 0;
+        double lo = std::numeric_limits<double>::infinity(), hi = -lo;  // over the fitted vertices
         for (const VertexCurvature& v : k) {
           if (v.rings == 0) continue;  // not fitted
           k1.push_back(v.k1);
@@ -249,6 +256,9 @@ void add_streams(CLI::App& app, Context& ctx) {
         }
         if (vdm->curvatures.empty()) o.curvatures = vdm_curvature_slices(k1, k2, per_u, vdm->curvature_steps);
         if (!vdm->relief_given) {
+          if (field.scale / per_u > kVdmMaxRelief)
+            throw InputError(vdm->mesh, "the map's height range is " + short_number(field.scale / per_u) +
+                                            " units of u on this mesh, beyond 1000 (are the map and the mesh in the same units?)");
           o.relief = static_cast<float>(std::max(1e-6, field.scale / per_u));
           // A height range below 1e-6 of the mesh's length per u is flat for any table: the
           // map and the mesh are likely of different assets or units.
@@ -257,7 +267,7 @@ void add_streams(CLI::App& app, Context& ctx) {
                                   " units of u on this mesh, raised to 1e-6 (are the map and the mesh in the same units?)");
         }
         mesh_report["object_length_per_u"] = per_u;
-        mesh_report["curvature_range"] = {lo, hi};
+        mesh_report["curvature_range"] = lo <= hi ? nlohmann::json{lo, hi} : nlohmann::json(nullptr);
         mesh_report["curvatures_per_u"] = o.curvatures;
       }
       // The raw table is held whole before it is compressed (W x H texels x theta x phi x
@@ -373,7 +383,8 @@ void add_streams(CLI::App& app, Context& ctx) {
       const int width = df.width, height = df.height, depth = df.depth;
       const float relief = df.relief;
       // Moved, not copied: at 4096² x 32 the field is 2.1 GB.
-      const Image img = distance_field_image(std::move(df), field);
+      Image img = distance_field_image(std::move(df), field);
+      if (sdf_args->half) round_distances_to_half(img);
       OutputSet outputs;
       write_image(img, outputs.add(sdf_args->output), sdf_args->half ? PixelFormat::half : PixelFormat::float32);
       outputs.commit();

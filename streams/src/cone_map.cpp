@@ -1,4 +1,5 @@
 #include "meso/streams/cone_map.hpp"
+#include "meso/streams/half_rounding.hpp"
 
 #include <Imath/half.h>
 #include <tbb/blocked_range.h>
@@ -1285,20 +1286,9 @@ double plane_excess(const float* plane, const Rect& r, const Rect& f, double top
 // Stored ratios round toward zero (a narrower cone is still safe); ratios are >= 0 and
 // below kConeRatioCap, so half's finite range holds them.
 float round_down(double v, bool half) {
-  if (half) {
-    Imath::half hv(static_cast<float>(v));
-    if (static_cast<double>(static_cast<float>(hv)) > v) hv.setBits(static_cast<unsigned short>(hv.bits() - 1));
-    return static_cast<float>(hv);
-  }
   float f = static_cast<float>(v);
   if (static_cast<double>(f) > v) f = std::nextafter(f, 0.0f);
-  return f;
-}
-
-float round_up_half(float v) {
-  Imath::half h(v);
-  if (static_cast<float>(h) < v) h.setBits(static_cast<unsigned short>(h.bits() + 1));  // v >= 0 here
-  return static_cast<float>(h);
+  return half ? half_below(f) : f;
 }
 
 // The planes and gradient boxes of leaf texels, which the tree does not store (7 floats a
@@ -2053,7 +2043,7 @@ Image build_cone_map(const HeightField& input, const ConeMapOptions& o, Progress
       out.at(i, j, 0) = field.height.at(i, j);
       out.at(i, j, 1) = round_down(std::min(ratio, static_cast<double>(kConeRatioCap)), o.half);
       const double t = top[static_cast<size_t>(k)];
-      out.at(i, j, 2) = o.half ? round_up_half(static_cast<float>(t)) : static_cast<float>(t);
+      out.at(i, j, 2) = o.half ? half_above(static_cast<float>(t)) : static_cast<float>(t);
     }
     // The block on the right reads from_left[bj] and the one below from_above[bi], each only
     // after this block is done, and this block was the last to need what they held.
@@ -2136,6 +2126,13 @@ HeightHit trace_cone_map(const HeightField& field, const Image& cone, ConeKind k
     ++out.steps;
     const double x = r.x + t * r.dx, y = r.y + t * r.dy, z = r.z + t * r.dz;
     if (field.border == Border::clamp && (x < 0 || y < 0 || x > w || y > h)) return out;
+    if (t >= t_floor) {
+      // At height 0 over the map, at or below S: it met S here, its footprint test having
+      // missed the floor by a rounding hair (z(t_floor) ~ +1e-16 over a flat map).
+      out.hit = true;
+      out.t = t_floor;
+      return out;
+    }
     // The texel the ray is in or entering (a point on an edge belongs to the texel ahead).
     int i = static_cast<int>(std::floor(x)), j = static_cast<int>(std::floor(y));
     if (x == i && r.dx < 0) --i;
@@ -2160,7 +2157,6 @@ HeightHit trace_cone_map(const HeightField& field, const Image& cone, ConeKind k
         out.t = th;
         return out;
       }
-      if (t_exit >= t_floor) return out;
       t = t_exit;
       continue;
     }

@@ -1,6 +1,7 @@
 #include "meso/streams/distance_field.hpp"
 
 #include "meso/core/lower_envelope.hpp"
+#include "meso/streams/half_rounding.hpp"
 #include "meso/streams/pyramid.hpp"
 
 #include <tbb/blocked_range.h>
@@ -155,6 +156,10 @@ Image distance_field_image(DistanceField field, const HeightField& source) {
   img.metadata["layout"] =
       std::string("slice k in rows [k H, (k+1) H), slice 0 lowest; voxel centre (x+0.5)/W, (y+0.5)/H, (k+0.5)/depth");
   return img;
+}
+
+void round_distances_to_half(Image& distance_field) {
+  for (float& v : distance_field.pixels) v = half_below(v);
 }
 
 }  // namespace meso

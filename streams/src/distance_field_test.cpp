@@ -4,6 +4,8 @@
 
 #include "test_fields.hpp"
 
+#include <Imath/half.h>
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -115,6 +117,28 @@ TEST(Sdf, FlatMapIsTheHeightAboveIt) {
   for (int k = 0; k < 10; ++k)
     for (int y = 0; y < 4; ++y)
       for (int x = 0; x < 8; ++x) ASSERT_NEAR(df.at(x, y, k), (k + 0.5f) / 10 * 0.25f, 1e-6f);
+}
+
+// --half: each distance rounded down (to nearest would put half of them beyond the empty
+// ball) and saturated below half's Inf: a relief of 1e5 makes the top slice's distance
+// 75000 units of u, beyond half's largest finite value, 65504.
+TEST(Sdf, HalfRoundsDownAndStaysFinite) {
+  const HeightField f = make_height_field(Image(3, 2, 1, 0.3f), Border::clamp);  // flat: all 0
+  DistanceFieldOptions o;
+  o.depth = 2;
+  o.relief = 1e5f;
+  const Image exact = distance_field_image(build_distance_field(f, o), f);
+  Image rounded = exact;
+  round_distances_to_half(rounded);
+  for (size_t i = 0; i < exact.pixels.size(); ++i) {
+    const float v = exact.pixels[i], r = rounded.pixels[i];
+    ASSERT_TRUE(std::isfinite(r)) << i;
+    EXPECT_LE(r, v) << i;
+    EXPECT_EQ(static_cast<float>(Imath::half(r)), r) << i << ": the file holds it as it is";
+  }
+  EXPECT_EQ(rounded.pixels.front(), 24992.0f) << "25000 rounded down";  // slice 0: 0.25 x 1e5
+  EXPECT_EQ(rounded.pixels.back(), 65504.0f) << "75000 saturates";
+  EXPECT_GT(exact.pixels.back(), 65504.0f);
 }
 
 // Tightness and safety at the voxel centres: the ball of the stored radius around each centre

@@ -120,6 +120,40 @@ TEST(PyramidTrace, FindsTheFirstIntersection) {
   }
 }
 
+// A flat floor at exactly 0 (a constant map) is met where the ray reaches height 0, which
+// rounding puts a hair above or below 0: every ray over a tiling floor hits it there, straight
+// or bent (the view-dependent displacement traces such rays; a floor missed by rounding
+// had become a silhouette).
+TEST(PyramidTrace, FlatFloorIsAlwaysMet) {
+  for (const HeightField& f : {make_height_field(Image(1, 1, 1, 0.3f), Border::wrap), make_height_field(Image(5, 3, 1, 0.7f), Border::wrap)}) {
+    ASSERT_EQ(f.height.pixels[0], 0.0f);
+    const MinMaxPyramid p = build_min_max_pyramid(f);
+    const Image cones = build_cone_map(f, {ConeKind::conservative}), relaxed = build_cone_map(f, {ConeKind::relaxed});
+    std::mt19937 rng(41);
+    std::uniform_real_distribution<double> u(0, 1);
+    for (int k = 0; k < 3000; ++k) {
+      HeightRay r = random_ray(f, rng);
+      r.x = u(rng) * f.height.width;
+      r.y = u(rng) * f.height.height;
+      r.ddz = k % 3 == 0 ? 0.0 : (k % 3 == 1 ? 1.0 : -1.0) * 20.0 * u(rng);  // bent both ways
+      // Where it reaches height 0, if it does before rising back out of [0, 1].
+      const double disc = r.dz * r.dz - 4 * r.ddz * r.z;
+      if (disc < 0) continue;  // bends back up above the floor
+      const double t0 = r.ddz == 0 ? -r.z / r.dz : (-r.dz - std::sqrt(disc)) / (2 * r.ddz);
+      const HeightHit got = trace_min_max_pyramid(f, p, r);
+      ASSERT_TRUE(got.hit) << "ray " << k << " (ddz " << r.ddz << ") missed a flat floor";
+      EXPECT_NEAR(got.t, t0, 1e-9 * (1 + t0)) << "ray " << k;
+      EXPECT_EQ(got.steps, 0) << "nothing to walk between the floor and the top";
+      if (r.ddz != 0) continue;  // the cone tracer's rays are straight
+      for (const ConeKind kind : {ConeKind::conservative, ConeKind::relaxed}) {
+        const HeightHit cone = trace_cone_map(f, kind == ConeKind::conservative ? cones : relaxed, kind, r);
+        ASSERT_TRUE(cone.hit) << "ray " << k << " missed a flat floor (cone tracer)";
+        EXPECT_NEAR(cone.t, t0, 1e-9 * (1 + t0)) << "ray " << k;
+      }
+    }
+  }
+}
+
 // Wrapped maps (rays crossing into neighbouring tiles) and bent rays of both signs: the
 // pyramid tracer still finds the dense march's first hit, and bent-up rays that leave the
 // height field miss in both.

@@ -1,8 +1,8 @@
 #include "meso/streams/pyramid.hpp"
 
 #include "meso/streams/cone_map.hpp"
+#include "meso/streams/half_rounding.hpp"
 
-#include <Imath/half.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -108,8 +108,7 @@ double first_root(double a, double b, double c, double lo, double hi) {
 struct PyramidTracer {
   const HeightField& field;
   const MinMaxPyramid& pyramid;
-  const HeightRay& r;
-  double ox = 0, oy = 0;  // the tile being traversed, in pixels (Border::wrap)
+  const HeightRay& r;  // its origin in the tile traversed (pixels of level 0)
   int steps = 0;
 
   // The ray's parameter interval over [x0, x1] x [y0, y1] (pixels), intersected with [t0, t1].
@@ -141,7 +140,7 @@ struct PyramidTracer {
     const double sx = static_cast<double>(pyramid.levels[0].width) / level.width;
     const double sy = static_cast<double>(pyramid.levels[0].height) / level.height;
     const double x0 = x * sx, x1 = (x + 1) * sx, y0 = y * sy, y1 = (y + 1) * sy;
-    if (!clip(ox + x0, ox + x1, oy + y0, oy + y1, t0, t1)) return false;
+    if (!clip(x0, x1, y0, y1, t0, t1)) return false;
     ++steps;
     const double top = level.at(x, y, 1);
     if (lowest(t0, t1) > top) return false;  // the ray passes over the box
@@ -149,8 +148,7 @@ struct PyramidTracer {
     if (r.ddz == 0) t0 = std::max(t0, (r.z - top) / -r.dz);
     if (t0 > t1) return false;
     if (l == 0) {
-      const int tx = static_cast<int>(std::lround(ox)) + x, ty = static_cast<int>(std::lround(oy)) + y;
-      return intersect_footprint(field, tx, ty, r, t0, t1, t_hit);
+      return intersect_footprint(field, x, y, r, t0, t1, t_hit);
     }
     // Finer texels overlapping this footprint, in the order the ray meets them.
     const Image& fine = pyramid.levels[static_cast<size_t>(l - 1)];
@@ -165,7 +163,7 @@ struct PyramidTracer {
     for (int cy = fy0; cy <= fy1; ++cy)
       for (int cx = fx0; cx <= fx1; ++cx) {
         double a = t0, b = t1;
-        if (clip(ox + cx * fsx, ox + (cx + 1) * fsx, oy + cy * fsy, oy + (cy + 1) * fsy, a, b) && n < 16)
+        if (clip(cx * fsx, (cx + 1) * fsx, cy * fsy, (cy + 1) * fsy, a, b) && n < 16)
           kids[static_cast<size_t>(n++)] = {a, {cx, cy}};
       }
     std::sort(kids.begin(), kids.begin() + n, [](const auto& p, const auto& q) { return p.first < q.first; });
@@ -178,59 +176,72 @@ struct PyramidTracer {
 }  // namespace
 
 void round_min_max_to_half(Image& min_max) {
-  // One half ulp toward -inf (down) or +inf (up) from h, for finite h.
-  auto step = [](Imath::half h, bool up) {
-    const bool zero = h.bits() == 0x0000 || h.bits() == 0x8000, negative = (h.bits() & 0x8000) != 0;
-    Imath::half r;
-    r.setBits(zero ? static_cast<unsigned short>(up ? 0x0001 : 0x8001)  // +-0: the smallest subnormal
-                   : static_cast<unsigned short>(h.bits() + (up != negative ? 1 : -1)));
-    return r;
-  };
   const int channels = std::min(2, min_max.channels);
   for (size_t i = 0; i < min_max.texel_count(); ++i)
     for (int c = 0; c < channels; ++c) {
       float& v = min_max.pixels[i * static_cast<size_t>(min_max.channels) + static_cast<size_t>(c)];
-      Imath::half h(v);  // to nearest
-      if (c == 0 && static_cast<float>(h) > v) h = step(h, false);
-      if (c == 1 && static_cast<float>(h) < v) h = step(h, true);
-      v = static_cast<float>(h);
+      v = c == 0 ? half_below(v) : half_above(v);
     }
 }
 
 HeightHit trace_min_max_pyramid(const HeightField& field, const MinMaxPyramid& pyramid, const HeightRay& r) {
   HeightHit out;
   if (!(r.dz < 0) || pyramid.levels.empty()) return out;
-  // Where the ray is inside the height range: from height 1 (or its start) down to where it
-  // passes below 0, or, bent upward, rises back above 1.
-  const double t0 = r.z > 1 ? first_root(r.ddz, r.dz, r.z - 1, -1e-300, kInf) : 0.0;
+  // S lies between the map's lowest and highest points (the top level's box): the ray is
+  // followed from where it comes down to the highest (or its start) to where it reaches the
+  // lowest, where it is at or below S, or, bent upward, where it rises back above the highest
+  // (it has left the height field). Only that stretch is traced: over a tiling map a steep
+  // relief and a grazing ray would otherwise cross tiles by the million above or below S.
+  const Image& apex = pyramid.levels.back();
+  const double lowest_s = apex.at(0, 0, 0), highest_s = apex.at(0, 0, 1);
+  const double t0 = r.z > highest_s ? first_root(r.ddz, r.dz, r.z - highest_s, -1e-300, kInf) : 0.0;
   if (!std::isfinite(t0)) return out;
-  const double below = first_root(r.ddz, r.dz, r.z, t0, kInf);
-  const double above = r.ddz > 0 ? first_root(r.ddz, r.dz, r.z - 1, t0 + 1e-12 * (1 + t0), kInf) : kInf;
+  const double below = r.z > lowest_s ? std::max(t0, first_root(r.ddz, r.dz, r.z - lowest_s, -1e-300, kInf)) : 0.0;
+  const double above = r.ddz > 0 ? first_root(r.ddz, r.dz, r.z - highest_s, t0 + 1e-12 * (1 + t0), kInf) : kInf;
   const double t1 = std::min(below, above);
   if (!std::isfinite(t1)) return out;
-  PyramidTracer tracer{field, pyramid, r};
   const int top = static_cast<int>(pyramid.levels.size()) - 1;
   const double w = pyramid.levels[0].width, h = pyramid.levels[0].height;
-  // The tiles the ray's path crosses, in order (one tile under Border::clamp).
+  // The tiles the ray's path crosses, in order (one tile under Border::clamp, where the ray
+  // may start outside the map), each traced with the ray's origin moved into the tile: texel
+  // numbers stay those of one tile.
   double t = t0;
+  if (field.border == Border::clamp) {
+    double enter = t0, leave = t1;
+    if (!PyramidTracer{field, pyramid, r}.clip(0, w, 0, h, enter, leave)) return out;
+    t = enter;
+  }
   while (t < t1) {
     const double x = r.x + (t + 1e-12 * (1 + t)) * r.dx, y = r.y + (t + 1e-12 * (1 + t)) * r.dy;
     const double a = std::floor(x / w), b = std::floor(y / h);
     if (field.border == Border::clamp && (a != 0 || b != 0)) break;
+    HeightRay local = r;
+    local.x -= a * w;
+    local.y -= b * h;
+    PyramidTracer tracer{field, pyramid, local};
     double ta = t, tb = t1;
-    tracer.clip(a * w, (a + 1) * w, b * h, (b + 1) * h, ta, tb);
-    tracer.ox = a * w;
-    tracer.oy = b * h;
+    tracer.clip(0, w, 0, h, ta, tb);
     double t_hit = 0;
-    if (tracer.visit(top, 0, 0, t, tb, t_hit)) {
+    const bool hit = tracer.visit(top, 0, 0, t, tb, t_hit);
+    out.steps += tracer.steps;
+    if (hit) {
       out.hit = true;
       out.t = t_hit;
-      break;
+      return out;
     }
     if (!(tb > t)) break;  // no progress (a degenerate path): stop
     t = tb;
   }
-  out.steps = tracer.steps;
+  // Reaching S's lowest point over the map, the ray is at or below S: it met S by then. Found
+  // here when rounding put the ray a hair above a floor at exactly that height (a flat map,
+  // or a pit at the map's minimum), where the tiles' tests see z(below) ~ +1e-16 over it.
+  if (below <= above) {
+    const double x = r.x + below * r.dx, y = r.y + below * r.dy;
+    if (field.border == Border::wrap || (x >= 0 && x <= w && y >= 0 && y <= h)) {
+      out.hit = true;
+      out.t = below;
+    }
+  }
   return out;
 }
 

@@ -213,7 +213,7 @@ std::vector<float> vdm_curvature_slices(const std::vector<float>& k1, const std:
     std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
     return static_cast<double>(v[k]);
   };
-  const double lo = std::min(0.0, percentile(k2, 0.05)), hi = std::max(0.0, percentile(k1, 0.95));
+  const double lo = percentile(k2, 0.05), hi = percentile(k1, 0.95);
   // The range is judged per unit of u, as the slices are stored: in 1 / object units a
   // mesh 1e12 units across has a range of ~1e-12 and would have been taken as flat.
   if (steps <= 1 || (hi - lo) * length_per_u <= 1e-9) {

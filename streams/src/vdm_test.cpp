@@ -157,6 +157,20 @@ TEST(Vdm, CurvatureSlicesIgnoreAFewSharpVertices) {
   EXPECT_FLOAT_EQ(one[0], 0.5f);  // the median mean curvature 0.25, times 2
 }
 
+// A sphere-like mesh curves one way only: the slices span its curvatures, not down to 0
+// (the range had been widened to include 0, the slices spread where no vertex is).
+TEST(Vdm, CurvatureSlicesSpanTheMeshNotZero) {
+  std::vector<float> k1, k2;
+  for (int i = 0; i <= 100; ++i) {
+    k1.push_back(1.0f + 0.001f * static_cast<float>(i));  // 1 .. 1.1
+    k2.push_back(0.9f + 0.001f * static_cast<float>(i));  // 0.9 .. 1.0
+  }
+  const std::vector<float> s = vdm_curvature_slices(k1, k2, 2.0, 3);
+  ASSERT_EQ(s.size(), 3u);
+  EXPECT_FLOAT_EQ(s[0], 2.0f * 0.905f);  // 5th percentile of k2, per unit of u
+  EXPECT_FLOAT_EQ(s[2], 2.0f * 1.095f);  // 95th of k1
+}
+
 // The same mesh at 1e12 units: curvatures 1e-12 as large, length per u 1e12 larger; the
 // slices per unit of u are the same (they had collapsed to one, the range taken as flat).
 TEST(Vdm, CurvatureSlicesDoNotDependOnTheUnits) {

@@ -49,4 +49,9 @@ DistanceField build_distance_field(const HeightField& field, const DistanceField
 // buffer (the layout is the same): pass std::move(field) to avoid a copy of it.
 Image distance_field_image(DistanceField field, const HeightField& source);
 
+// Rounds every distance of such an image down to a value a half float holds, saturating at
+// 65504, so that a file written with --half keeps its spheres empty (the writer rounds to
+// nearest, half the time up, and overflows to Inf above 65504).
+void round_distances_to_half(Image& distance_field);
+
 }  // namespace meso

@@ -46,8 +46,10 @@ void round_min_max_to_half(Image& min_max);
 // height_ray.hpp. Bent rays (ddz != 0) are exact too: a node is skipped when the lowest
 // point of the ray over it is above its maximum. Under Border::clamp a ray leaving
 // [0, W] x [0, H] misses; under Border::wrap it goes on through the neighbouring tiles.
-// The ray is followed until it passes below height 0 or, bent upward, back above height 1
-// (then it has left the height field: no hit). `steps` counts the texels visited.
+// The ray is followed from where it comes down to S's highest point until it reaches S's
+// lowest (the hit is there at the latest) or, bent upward, rises back above the highest
+// (then it has left the height field: no hit); over a flat map nothing is walked, whatever
+// relief. `steps` counts the texels visited.
 HeightHit trace_min_max_pyramid(const HeightField& field, const MinMaxPyramid& pyramid, const HeightRay& ray);
 
 }  // namespace meso
