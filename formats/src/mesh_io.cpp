@@ -138,8 +138,9 @@ size_t check_obj_texcoords(const std::string& text, const std::string& name) {
         const char* a = t + (*t == '+' ? 1 : 0);
         double value = 0;
         const auto [ptr, ec] = std::from_chars(a, q, value);
-        if (ec != std::errc() || ptr != q || !std::isfinite(value))
-          throw InputError(name, where() + ": texture coordinate '" + std::string(token) + "' is not a finite number");
+        // Finite as a float too: meso's UVs are floats, and 1e39 would be read as inf.
+        if (ec != std::errc() || ptr != q || !std::isfinite(static_cast<float>(value)))
+          throw InputError(name, where() + ": texture coordinate '" + std::string(token) + "' is not a finite number (as a float)");
         continue;
       }
       // v, v/vt, v/vt/vn or v//vn: only the vt index is checked here (assimp checks v's).
@@ -493,7 +494,7 @@ Mesh read_mesh(const fs::path& path, MeshReadReport* report) {
             const aiVector3D t = am->mTextureCoords[0][idx[k]];
             uv = Vec2f(t.x, t.y);
             if (!std::isfinite(uv[0]) || !std::isfinite(uv[1]))
-              throw InputError(name, "face " + std::to_string(mesh.n_faces() - 1) + " has a NaN texture coordinate");
+              throw InputError(name, "face " + std::to_string(mesh.n_faces() - 1) + " has a NaN or infinite texture coordinate");
           }
           mesh.set_texcoord2D(h, uv);
         }

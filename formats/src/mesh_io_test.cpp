@@ -203,6 +203,7 @@ TEST(MeshIo, ObjTextureCoordinatesAreCheckedNotRepaired) {
   const std::vector<Case> bad = {
       {"nan.obj", quad + "vt 0 0\nvt nan 0\nvt 1 1\nf 1/1 2/2 3/3\n", "line 6: texture coordinate 'nan' is not a finite number"},
       {"inf.obj", quad + "vt 0 0\nvt 1 -inf\nvt 1 1\nf 1/1 2/2 3/3\n", "line 6: texture coordinate '-inf'"},
+      {"float.obj", quad + "vt 0 0\nvt 1e39 0\nvt 1 1\nf 1/1 2/2 3/3\n", "line 6: texture coordinate '1e39' is not a finite number (as a float)"},
       {"comma.obj", quad + "vt 0 0\nvt 0,5 0\nvt 1 1\nf 1/1 2/2 3/3\n", "line 6: texture coordinate '0,5'"},
       {"range.obj", quad + "vt 0 0\nvt 1 0\nvt 1 1\nf 1/1 2/2 3/3\nf 1/1 3/3 4/9/1\n",
        "line 9: face corner '4/9/1' names texture coordinate 9, but the file has 3"},
