@@ -13,6 +13,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdint>
+#include <filesystem>
+#include <limits>
 #include <memory>
 
 namespace meso {
@@ -180,10 +182,26 @@ OIIO::TypeDesc type_of(PixelFormat format) {
   return OIIO::TypeDesc::FLOAT;
 }
 
-void check_writable(const Image& image, const std::string& name) {
-  if (image.empty()) throw InternalError(name + ": refusing to write an empty image");
+// The file's own name for messages: an OutputSet writes to ".meso-tmp-<pid>-<n>-<name>"
+// beside it (atomic_file.hpp), which the user never sees.
+std::string shown_name(const std::string& name) {
+  const std::filesystem::path p(name);
+  const std::string file = p.filename().string();
+  if (file.rfind(".meso-tmp-", 0) != 0) return name;
+  size_t at = std::string(".meso-tmp-").size();
+  for (int dash = 0; dash < 2 && at != std::string::npos; ++dash) at = file.find('-', at) + 1;  // past <pid>- and <n>-
+  return at == std::string::npos || at == 0 ? name : (p.parent_path() / file.substr(at)).string();
+}
+
+// No map meso writes holds NaN or Inf ("never write NaN into a map"), nor, in half, a value
+// that half would turn into Inf: either is a bug upstream, refused before a byte is written.
+void check_writable(const Image& image, const std::string& name, PixelFormat format) {
+  if (image.empty()) throw InternalError(shown_name(name) + ": refusing to write an empty image");
+  const float limit = format == PixelFormat::half ? 65504.0f : std::numeric_limits<float>::max();
   for (float v : image.pixels) {
-    if (std::isnan(v)) throw InternalError(name + ": image has NaN samples (a bug in meso)");
+    if (!(std::abs(v) <= limit))
+      throw InternalError(shown_name(name) + ": image has " + (std::isnan(v) ? "NaN" : "infinite") + " samples" +
+                          (std::isfinite(v) ? " in half floats" : "") + " (a bug in meso)");
   }
 }
 
@@ -235,7 +253,7 @@ bool write_pixels(OIIO::ImageOutput& out, const Image& image, PixelFormat format
 
 void write_image(const Image& image, const fs::path& path, PixelFormat format) {
   const std::string name = path.string();
-  check_writable(image, name);
+  check_writable(image, name, format);
   auto out = OIIO::ImageOutput::create(name);
   if (!out) throw InternalError(name + ": no image writer for this extension");
   std::string extension = path.extension().string();
@@ -249,7 +267,7 @@ void write_image_levels(const std::vector<Image>& levels, const fs::path& path, 
   const std::string name = path.string();
   if (levels.empty()) throw InternalError(name + ": no levels to write");
   for (size_t k = 0; k < levels.size(); ++k) {
-    check_writable(levels[k], name);
+    check_writable(levels[k], name, format);
     if (levels[k].channels != levels[0].channels) throw InternalError(name + ": levels differ in channel count");
     if (k > 0 && (levels[k].width != std::max(1, levels[k - 1].width / 2) || levels[k].height != std::max(1, levels[k - 1].height / 2)))
       throw InternalError(name + ": level sizes do not halve (rounding down) from one level to the next");
@@ -279,7 +297,7 @@ std::vector<Image> read_image_levels(const fs::path& path) {
 
 void write_image_parts(const std::vector<Image>& parts, const fs::path& path, PixelFormat format) {
   const std::string name = path.string();
-  for (const Image& part : parts) check_writable(part, name);
+  for (const Image& part : parts) check_writable(part, name, format);
   if (format != PixelFormat::float32 && format != PixelFormat::half) throw InternalError(name + ": parts are written as EXR only");
   auto out = OIIO::ImageOutput::create(name);
   if (!out || !out->supports("multiimage")) throw InternalError(name + ": this format cannot hold several parts (use .exr)");

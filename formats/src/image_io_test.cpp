@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include <cmath>
 #include <ctime>
 #include <filesystem>
@@ -89,6 +91,27 @@ TEST(ImageIo, RefusesToWriteNaN) {
   Image img(2, 2, 1, 0.0f);
   img.pixels[3] = std::nanf("");
   EXPECT_THROW(write_image(img, dir / "bad.exr", PixelFormat::float32), InternalError);
+}
+
+// Inf too, and in half any value half would store as Inf; the message names the file the user
+// asked for, not the temporary it is written under.
+TEST(ImageIo, RefusesToWriteInfAndNamesTheOutput) {
+  test::TempDir dir;
+  Image img(2, 2, 1, 0.0f);
+  img.pixels[1] = -std::numeric_limits<float>::infinity();
+  EXPECT_THROW(write_image(img, dir / "inf.exr", PixelFormat::float32), InternalError);
+  img.pixels[1] = 70000.0f;
+  write_image(img, dir / "big.exr", PixelFormat::float32);  // float holds it
+  try {
+    write_image(img, dir / ".meso-tmp-123-0-big.exr", PixelFormat::half);
+    ADD_FAILURE() << "70000 is Inf in half";
+  } catch (const InternalError& e) {
+    EXPECT_EQ(std::string(e.what()).find(".meso-tmp"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find((dir / "big.exr").string()), std::string::npos) << e.what();
+  }
+  img.pixels[1] = 65504.0f;
+  write_image(img, dir / "edge.exr", PixelFormat::half);
+  EXPECT_EQ(read_image(dir / "edge.exr").pixels[1], 65504.0f);
 }
 
 TEST(ImageIo, MissingAndGarbageFilesAreInputErrors) {

@@ -17,7 +17,9 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
+#include <limits>
 #include <fstream>
 #include <mutex>
 #include <sstream>
@@ -45,6 +47,12 @@ namespace meso {
 namespace fs = std::filesystem;
 
 namespace {
+
+std::string format_number(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", v);
+  return text;
+}
 
 struct PosKey {
   uint32_t b[3];
@@ -104,11 +112,13 @@ std::string file_text(const fs::path& path, const std::string& name) {
 
 // assimp's OBJ reader turns a texture coordinate it cannot parse ("nan", "inf", "0,5") into 0,
 // and when a face names a texture coordinate the file does not have it drops every UV of the
-// file, without a word either time: a bake would then read a wrong or missing mapping. So an
-// OBJ's `vt` values and the texture indices of its `f` lines are checked first, naming the
-// line (one pass over the file, about 1.5 s per GB). Returns the triangles of faces without
-// texture indices when the file has some `vt` (assimp gives their corners UV 0,0 silently).
-size_t check_obj_texcoords(const std::string& text, const std::string& name) {
+// file, without a word either time: a bake would then read a wrong or missing mapping; a `v`
+// line it cannot parse ("v abc 0 0", "v 0 0") it drops, and the faces then fail with "vertex
+// index out of range". So an OBJ's `v` and `vt` values and the texture indices of its `f`
+// lines are checked first, naming the line (one pass over the file, about 1.5 s per GB).
+// Returns the triangles of faces without texture indices when the file has some `vt` (assimp
+// gives their corners UV 0,0 silently).
+size_t check_obj_lines(const std::string& text, const std::string& name) {
   const auto blank = [](char c) { return c == ' ' || c == '\t' || c == '\r'; };
   long long texcoords = 0, largest = 0;
   size_t line = 0, largest_line = 0, untextured = 0;
@@ -121,19 +131,31 @@ size_t check_obj_texcoords(const std::string& text, const std::string& name) {
     p = eol + 1;
     while (q < eol && blank(*q)) ++q;
     const bool vt = eol - q > 2 && q[0] == 'v' && q[1] == 't' && blank(q[2]);
+    const bool v = eol - q > 1 && q[0] == 'v' && blank(q[1]);
     const bool f = eol - q > 1 && q[0] == 'f' && blank(q[1]);
-    if (!vt && !f) continue;
+    if (!vt && !v && !f) continue;
     const char* stop = static_cast<const char*>(std::memchr(q, '#', static_cast<size_t>(eol - q)));
     if (!stop) stop = eol;
     q += vt ? 2 : 1;
     const auto where = [&] { return "line " + std::to_string(line); };
-    size_t corners = 0, textured = 0;
+    size_t corners = 0, textured = 0, values = 0;
     while (q < stop) {
       while (q < stop && blank(*q)) ++q;
       const char* t = q;
       while (q < stop && !blank(*q)) ++q;
       if (t == q) break;
       const std::string_view token(t, static_cast<size_t>(q - t));
+      if (v) {
+        // x y z, then an optional w or r g b, which assimp reads or ignores: only the position's
+        // three values are checked.
+        if (++values > 3) break;
+        const char* a = t + (*t == '+' ? 1 : 0);
+        double value = 0;
+        const auto [ptr, ec] = std::from_chars(a, q, value);
+        if (ec != std::errc() || ptr != q || !std::isfinite(static_cast<float>(value)))
+          throw InputError(name, where() + ": vertex coordinate '" + std::string(token) + "' is not a finite number (as a float)");
+        continue;
+      }
       if (vt) {
         const char* a = t + (*t == '+' ? 1 : 0);
         double value = 0;
@@ -161,6 +183,7 @@ size_t check_obj_texcoords(const std::string& text, const std::string& name) {
       if (index > largest) largest = index, largest_line = line, largest_token = token;
       ++textured;
     }
+    if (v && values < 3) throw InputError(name, where() + ": a vertex needs three coordinates (x y z)");
     if (vt) ++texcoords;
     if (f && textured == 0 && corners >= 3) untextured += corners - 2;  // assimp fans a polygon into n - 2 triangles
   }
@@ -388,7 +411,7 @@ Mesh read_mesh(const fs::path& path, MeshReadReport* report) {
   if (fs::is_directory(path)) throw InputError(name, "is a folder, not a mesh file");
   const bool obj = lower_ext(path) == ".obj";
   const std::string obj_text = obj ? file_text(path, name) : std::string();
-  const size_t obj_untextured = obj ? check_obj_texcoords(obj_text, name) : 0;
+  const size_t obj_untextured = obj ? check_obj_lines(obj_text, name) : 0;
   if (lower_ext(path) == ".ply") check_ply(file_text(path, name), name);
   // A UTF-8 byte-order mark (some Windows tools write one) hides the OBJ's first line from
   // assimp, which then reports an index out of range: such a file is read from memory, past
@@ -503,6 +526,22 @@ Mesh read_mesh(const fs::path& path, MeshReadReport* report) {
     }
   }
   if (mesh.n_faces() == 0) throw InputError(name, "contains no triangles");
+  {
+    // meso computes in float where it must (Embree, OpenMesh points, the maps): a mesh whose
+    // extent is near float's limits overflows distances and curvatures to Inf (3e38: every
+    // displacement texel) or loses them to denormals (1e-39: Inf curvatures). Refused here,
+    // once, for every command.
+    OpenMesh::Vec3d lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+    for (auto v : mesh.vertices()) {
+      const OpenMesh::Vec3d p = OpenMesh::vector_cast<OpenMesh::Vec3d>(mesh.point(v));
+      lo.minimize(p);
+      hi.maximize(p);
+    }
+    const double span = (hi - lo).norm();
+    if (span > kMaxMeshSpan || (span > 0 && span < kMinMeshSpan))
+      throw InputError(name, "its vertices span " + format_number(span) + " units, outside the " + format_number(kMinMeshSpan) + " to " +
+                                 format_number(kMaxMeshSpan) + " that float arithmetic holds (rescale the mesh)");
+  }
   // An OBJ's faces without `vt` inside a textured object are counted only by the scan (assimp
   // gives them UV 0,0); it also counts those of untextured objects, which the loop above saw.
   if (any_uv) rep.faces_without_uv = std::max(rep.faces_without_uv, obj_untextured);

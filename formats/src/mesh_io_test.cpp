@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
+
 #include <limits>
 #include <map>
 
@@ -192,6 +194,28 @@ TEST(MeshIo, TruncatedPlyIsAnInputErrorNotAnAbort) {
   }
 }
 
+// Extents float arithmetic cannot hold are refused on reading, for every command: at 3e38
+// a bake wrote Inf into every texel, at 1e-39 frames wrote Inf curvatures. Within the range,
+// and without extent (one point), a mesh is read.
+TEST(MeshIo, ExtentsBeyondFloatArithmeticAreRefused) {
+  test::TempDir dir;
+  const auto triangle = [&](const char* file, double s) {
+    char text[256];
+    std::snprintf(text, sizeof text, "v 0 0 0\nv %.9g 0 0\nv 0 %.9g 0\nf 1 2 3\n", s, s);
+    test::write_text(dir / file, text);
+    return dir / file;
+  };
+  for (const double bad : {3e38, 1e37, 1e-31, 1e-39}) {
+    try {
+      read_mesh(triangle("bad.obj", bad));
+      ADD_FAILURE() << bad << " must be refused";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("that float arithmetic holds"), std::string::npos) << e.what();
+    }
+  }
+  for (const double good : {1e35, 1.0, 1e-29, 0.0}) EXPECT_EQ(read_mesh(triangle("good.obj", good)).n_faces(), 1u) << good;
+}
+
 // assimp reads an unparsable `vt` value as 0 and, when a face names a `vt` the file lacks,
 // drops every UV of the file: both are refused, naming the line.
 TEST(MeshIo, ObjTextureCoordinatesAreCheckedNotRepaired) {
@@ -204,6 +228,11 @@ TEST(MeshIo, ObjTextureCoordinatesAreCheckedNotRepaired) {
       {"nan.obj", quad + "vt 0 0\nvt nan 0\nvt 1 1\nf 1/1 2/2 3/3\n", "line 6: texture coordinate 'nan' is not a finite number"},
       {"inf.obj", quad + "vt 0 0\nvt 1 -inf\nvt 1 1\nf 1/1 2/2 3/3\n", "line 6: texture coordinate '-inf'"},
       {"float.obj", quad + "vt 0 0\nvt 1e39 0\nvt 1 1\nf 1/1 2/2 3/3\n", "line 6: texture coordinate '1e39' is not a finite number (as a float)"},
+      // assimp drops a `v` it cannot parse, and the faces then name vertices out of range.
+      {"vword.obj", "v 0 0 0\nv abc 0 0\nv 1 1 0\nf 1 2 3\n", "line 2: vertex coordinate 'abc' is not a finite number"},
+      {"vshort.obj", "v 0 0 0\nv 1 0\nv 1 1 0\nf 1 2 3\n", "line 2: a vertex needs three coordinates"},
+      {"vfloat.obj", "v 0 0 0\nv 1 0 -1e39\nv 1 1 0 # far\nf 1 2 3\n", "line 2: vertex coordinate '-1e39'"},
+      {"vnan.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv nan nan nan\nf 1 2 3\n", "line 4: vertex coordinate 'nan'"},
       {"comma.obj", quad + "vt 0 0\nvt 0,5 0\nvt 1 1\nf 1/1 2/2 3/3\n", "line 6: texture coordinate '0,5'"},
       {"range.obj", quad + "vt 0 0\nvt 1 0\nvt 1 1\nf 1/1 2/2 3/3\nf 1/1 3/3 4/9/1\n",
        "line 9: face corner '4/9/1' names texture coordinate 9, but the file has 3"},
@@ -360,7 +389,7 @@ TEST(MeshIo, NanCoordinateIsAnInputError) {
     read_mesh(dir / "nan.obj");
     FAIL() << "a NaN vertex must be refused";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("NaN"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("line 3: vertex coordinate 'nan' is not a finite number"), std::string::npos) << e.what();
   }
 }
 

@@ -977,6 +977,20 @@ TEST(SurfaceDistance, KnownDistances) {
   EXPECT_EQ(measure(a, half).rms, h.rms) << "deterministic";
 }
 
+// Degenerate faces are no surface on either side: their corners are not sampled, as they are
+// not measured against (a zero-area spike above a square had made a mesh 1 unit from itself).
+TEST(SurfaceDistance, DegenerateFacesAreNoSurface) {
+  TriangleSoup spiked = triangle_soup(test::make_grid(3, 3));
+  const auto tip = static_cast<uint32_t>(spiked.points.size());
+  spiked.points.push_back(Vec3f(0.5f, 0.5f, 1.0f));
+  spiked.points.push_back(Vec3f(0.5f, 0.5f, 2.0f));
+  spiked.triangles.push_back({tip, tip, 0});            // a repeated corner
+  spiked.triangles.push_back({tip, tip + 1, tip});      // a segment
+  const SurfaceDistance d = measure_surface_distance(spiked, spiked);
+  EXPECT_LT(d.hausdorff, 1e-12) << "the spike's tip was 1 away";
+  EXPECT_LT(d.rms, 1e-12);
+}
+
 // The measure at the ends of float's range: a mesh pair scaled by 2^100 (about 1.3e30) or
 // 2^-100 gives the unit pair's figures times the scale, bit for bit (power-of-two scaling is
 // exact); before, Embree's float distances made them inf at 1e30 and 0 at 1e-30. The same

@@ -78,12 +78,16 @@ std::vector<Triangle> triangles(const TriangleSoup& m, const UnitScale& s) {
   return out;
 }
 
-// Every point used by a triangle, plus `n` points spread over the triangles by area.
+// Every point used by a non-degenerate triangle, plus `n` points spread over the triangles by
+// area. (The corners of degenerate ones are left out as they are from the triangles measured
+// against: a zero-area spike's tip had been a sample, 1 unit from the other mesh's surface
+// even when that mesh was the same.)
 std::vector<Vec3d> sample(const TriangleSoup& m, const std::vector<Triangle>& tris, size_t n, uint64_t seed, const UnitScale& s) {
   std::vector<Vec3d> out;
   std::vector<char> used(m.points.size(), 0);
   for (const auto& t : m.triangles)
-    for (const uint32_t i : t) used[i] = 1;
+    if (!triangle(m, t, s).degenerate())
+      for (const uint32_t i : t) used[i] = 1;
   for (size_t i = 0; i < m.points.size(); ++i)
     if (used[i]) out.push_back(s(m.points[i]));
   double total = 0;

@@ -31,8 +31,11 @@ struct MeshReadReport {
 //    halfedges, so seams survive welding; normals are averaged at welded vertices, or
 //    computed (angle-weighted) when the file has none;
 //  - non-manifold faces and faces with a repeated vertex are kept on separate vertices.
-// Throws InputError naming the file when it is missing, unreadable, has no triangles, or
-// has a NaN/infinite coordinate.
+// Throws InputError naming the file when it is missing, unreadable, has no triangles, has a
+// NaN/infinite coordinate, or its vertices' bounding-box diagonal lies outside
+// [kMinMeshSpan, kMaxMeshSpan] (0 is allowed: a mesh without extent), beyond which float
+// distances, areas and curvatures overflow or vanish.
+constexpr double kMinMeshSpan = 1e-30, kMaxMeshSpan = 1e36;
 Mesh read_mesh(const std::filesystem::path& path, MeshReadReport* report = nullptr);
 
 // Writes by extension: .obj (per-corner UVs as `vt`, normals), .ply (binary; vertices split

@@ -2,7 +2,7 @@
 // report, its tests and bench/meshreduce_peers): approximate two-sided Hausdorff and RMS
 // distance by dense sampling.
 //
-// Each mesh is sampled at all its vertices plus `samples` points spread over its faces in
+// Each mesh is sampled at the vertices of its non-degenerate faces plus `samples` points spread over its faces in
 // proportion to area (a fixed-seed generator: the same meshes give the same figures); each
 // sample's distance to the other mesh's triangles is exact up to double rounding: the
 // nearest of all non-degenerate triangles, found through an Embree BVH (rtcPointQuery, a
