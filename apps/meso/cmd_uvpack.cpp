@@ -290,7 +290,7 @@ void add_uvpack(CLI::App& app, Context& ctx) {
                 {"charts", r.charts},
                 {"scale", r.scale},
                 {"utilization", r.utilization},
-                {"texel_coverage", r.texel_coverage},
+                {"texel_coverage", c.texel_coverage},  // the checker's, as formats.md says (the packer's includes its rounding margin)
                 {"attempts", r.attempts},
                 {"seconds", pack_seconds},
                 {"check", {{"overlapping_faces", c.overlapping_faces.size()},

@@ -2127,16 +2127,18 @@ HeightHit trace_cone_map(const HeightField& field, const Image& cone, ConeKind k
     const double x = r.x + t * r.dx, y = r.y + t * r.dy, z = r.z + t * r.dz;
     if (field.border == Border::clamp && (x < 0 || y < 0 || x > w || y > h)) return out;
     if (t >= t_floor) {
-      // At height 0 over the map, at or below S: it met S here, its footprint test having
-      // missed the floor by a rounding hair (z(t_floor) ~ +1e-16 over a flat map).
+      // At height 0 over the map (or starting below it), at or below S: it met S here, its
+      // footprint test having missed the floor by a rounding hair (z(t_floor) ~ +1e-16 over a
+      // flat map).
       out.hit = true;
-      out.t = t_floor;
+      out.t = t;
       return out;
     }
-    // The texel the ray is in or entering (a point on an edge belongs to the texel ahead).
-    int i = static_cast<int>(std::floor(x)), j = static_cast<int>(std::floor(y));
-    if (x == i && r.dx < 0) --i;
-    if (y == j && r.dy < 0) --j;
+    // The texel the ray is in or entering: judged a hair ahead along the ray, so that a point
+    // on an edge belongs to the texel ahead even when rounding put it a hair short of the edge
+    // (the exit time was then t itself, and the march stalled until max_steps: a miss).
+    const double ahead = t + 1e-12 * (1 + t);
+    int i = static_cast<int>(std::floor(r.x + ahead * r.dx)), j = static_cast<int>(std::floor(r.y + ahead * r.dy));
     if (field.border == Border::clamp) {
       i = std::clamp(i, 0, w - 1);
       j = std::clamp(j, 0, h - 1);

@@ -186,7 +186,7 @@ void round_min_max_to_half(Image& min_max) {
 
 HeightHit trace_min_max_pyramid(const HeightField& field, const MinMaxPyramid& pyramid, const HeightRay& r) {
   HeightHit out;
-  if (!(r.dz < 0) || pyramid.levels.empty()) return out;
+  if (!(r.dz < 0) || pyramid.levels.empty() || pyramid.levels[0].empty()) return out;
   // S lies between the map's lowest and highest points (the top level's box): the ray is
   // followed from where it comes down to the highest (or its start) to where it reaches the
   // lowest, where it is at or below S, or, bent upward, where it rises back above the highest
@@ -202,19 +202,19 @@ HeightHit trace_min_max_pyramid(const HeightField& field, const MinMaxPyramid& p
   if (!std::isfinite(t1)) return out;
   const int top = static_cast<int>(pyramid.levels.size()) - 1;
   const double w = pyramid.levels[0].width, h = pyramid.levels[0].height;
-  // The tiles the ray's path crosses, in order (one tile under Border::clamp, where the ray
-  // may start outside the map), each traced with the ray's origin moved into the tile: texel
-  // numbers stay those of one tile.
+  // The tiles the ray's path crosses, in order (one tile under Border::clamp), each traced
+  // with the ray's origin moved into the tile: texel numbers stay those of one tile. `walked`:
+  // the walk reached t1 (not stopped by leaving a clamped map or by a path too far out for
+  // its steps to progress in double).
   double t = t0;
-  if (field.border == Border::clamp) {
-    double enter = t0, leave = t1;
-    if (!PyramidTracer{field, pyramid, r}.clip(0, w, 0, h, enter, leave)) return out;
-    t = enter;
-  }
+  bool walked = true;
   while (t < t1) {
     const double x = r.x + (t + 1e-12 * (1 + t)) * r.dx, y = r.y + (t + 1e-12 * (1 + t)) * r.dy;
     const double a = std::floor(x / w), b = std::floor(y / h);
-    if (field.border == Border::clamp && (a != 0 || b != 0)) break;
+    if (field.border == Border::clamp && (a != 0 || b != 0)) {
+      walked = false;
+      break;
+    }
     HeightRay local = r;
     local.x -= a * w;
     local.y -= b * h;
@@ -229,13 +229,16 @@ HeightHit trace_min_max_pyramid(const HeightField& field, const MinMaxPyramid& p
       out.t = t_hit;
       return out;
     }
-    if (!(tb > t)) break;  // no progress (a degenerate path): stop
+    if (!(tb > t)) {  // no progress (a degenerate path): stop
+      walked = false;
+      break;
+    }
     t = tb;
   }
-  // Reaching S's lowest point over the map, the ray is at or below S: it met S by then. Found
-  // here when rounding put the ray a hair above a floor at exactly that height (a flat map,
-  // or a pit at the map's minimum), where the tiles' tests see z(below) ~ +1e-16 over it.
-  if (below <= above) {
+  // Walked over the map down to S's lowest point, the ray is at or below S: it met S by then.
+  // Found here when rounding put the ray a hair above a floor at exactly that height (a flat
+  // map, or a pit at the map's minimum), where the tiles' tests see z(below) ~ +1e-16 over it.
+  if (walked && below <= above) {
     const double x = r.x + below * r.dx, y = r.y + below * r.dy;
     if (field.border == Border::wrap || (x >= 0 && x <= w && y >= 0 && y <= h)) {
       out.hit = true;

@@ -216,14 +216,20 @@ std::vector<float> vdm_curvature_slices(const std::vector<float>& k1, const std:
   const double lo = percentile(k2, 0.05), hi = percentile(k1, 0.95);
   // The range is judged per unit of u, as the slices are stored: in 1 / object units a
   // mesh 1e12 units across has a range of ~1e-12 and would have been taken as flat.
-  if (steps <= 1 || (hi - lo) * length_per_u <= 1e-9) {
+  const auto median_mean = [&] {
     std::vector<float> mean(k1.size());
     for (size_t i = 0; i < k1.size(); ++i) mean[i] = 0.5f * (k1[i] + k2[std::min(i, k2.size() - 1)]);
-    return {static_cast<float>(percentile(mean, 0.5) * length_per_u)};
-  }
+    return std::vector<float>{static_cast<float>(percentile(mean, 0.5) * length_per_u)};
+  };
+  if (steps <= 1 || (hi - lo) * length_per_u <= 1e-9) return median_mean();
+  // Strictly increasing as floats (the previewer interpolates between neighbours): a range
+  // narrow against its distance from 0 (k = 1 +- 3e-6) rounds several steps to one float.
   std::vector<float> out;
-  for (int i = 0; i < steps; ++i) out.push_back(static_cast<float>((lo + (hi - lo) * i / (steps - 1)) * length_per_u));
-  return out;
+  for (int i = 0; i < steps; ++i) {
+    const float v = static_cast<float>((lo + (hi - lo) * i / (steps - 1)) * length_per_u);
+    if (out.empty() || v > out.back()) out.push_back(v);
+  }
+  return out.size() > 1 ? out : median_mean();
 }
 
 }  // namespace meso

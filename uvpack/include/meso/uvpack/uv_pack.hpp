@@ -44,7 +44,10 @@ struct UvPackReport {
   size_t charts = 0;
   double scale = 0;           // texels per unit of the input UVs (one scale for every chart)
   double utilization = 0;     // the charts' UV triangle areas / the atlas area (padding and touched-only texels not counted)
-  double texel_coverage = 0;  // texels touched by charts / all texels (conservative, as uv_check)
+  // Texels reserved for charts / all texels: those their triangles touch (conservatively, as
+  // uv_check counts them) plus the few within the float rounding margin of the written UVs
+  // (rounding_margin in uv_pack.cpp): at least uv_check's texel_coverage, above it by ~1e-4.
+  double texel_coverage = 0;
   int attempts = 0;           // packings tried while searching the scale
 };
 
