@@ -1598,6 +1598,13 @@ TEST(CliBake, TiledUvsWarnAndADetailBeyondTheFloatSpanIsRefused) {
   EXPECT_EQ(detail.code, 3) << detail.err;
   EXPECT_NE(detail.err.find("checker.exr: its values span more than the float range"), std::string::npos) << detail.err;
   EXPECT_FALSE(fs::exists(dir / "d"));
+  // Finite values that overflow once scaled: refused naming the map (they had reached the
+  // writer as Inf, exit 4).
+  write_image(Image(4, 4, 1, 1e34f), dir / "strong.exr", PixelFormat::float32);
+  const Result strong = run(bake_args(dir, "low.obj", "high.obj", "s", "--size 8 --detail " + (dir / "strong.exr").string() + " --detail-scale 1e6"));
+  EXPECT_EQ(strong.code, 3) << strong.err;
+  EXPECT_NE(strong.err.find("strong.exr: its values times --detail-scale"), std::string::npos) << strong.err;
+  EXPECT_FALSE(fs::exists(dir / "s"));
 }
 
 // --basis pn: a coarse sphere band (12 sides, radial normals in the file) over a fine one. The

@@ -157,6 +157,11 @@ void add_bake(CLI::App& app, Context& ctx) {
             hi = std::max(hi, detail.pixels[i]);
           }
           if (!std::isfinite(hi - lo)) throw InputError(args->detail, "its values span more than the float range; rescale the map");
+          // The displacement it adds is value x --detail-scale, stored as float.
+          const double reach = std::max(std::abs(static_cast<double>(lo)), std::abs(static_cast<double>(hi))) * args->detail_scale;
+          if (!std::isfinite(static_cast<float>(reach)) || !std::isfinite(static_cast<float>((static_cast<double>(hi) - lo) * args->detail_scale)))
+            throw InputError(args->detail, "its values times --detail-scale " + short_number(args->detail_scale) +
+                                               " reach " + short_number(reach) + ", beyond the float range; rescale the map or the scale");
         }
         o.detail = &detail;
         o.detail_scale = args->detail_scale;

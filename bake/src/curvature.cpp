@@ -103,6 +103,9 @@ std::vector<VertexCurvature> fit_curvature(const Mesh& mesh) {
     const Eigen::Matrix2d L = I.llt().matrixL();
     const Eigen::Matrix2d Li = L.inverse();
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(Li * II * Li.transpose());  // ascending
+    // Beyond float (features ~1e-39 across on a mesh of ordinary size): no fit, as where the
+    // rings cannot determine one, rather than Inf in the mesh's _CURVATURE.
+    if (!std::isfinite(static_cast<float>(eig.eigenvalues()[0])) || !std::isfinite(static_cast<float>(eig.eigenvalues()[1]))) continue;
     VertexCurvature& c = out[static_cast<size_t>(v.idx())];
     c.k1 = static_cast<float>(eig.eigenvalues()[1]);
     c.k2 = static_cast<float>(eig.eigenvalues()[0]);

@@ -255,26 +255,26 @@ void write_image(const Image& image, const fs::path& path, PixelFormat format) {
   const std::string name = path.string();
   check_writable(image, name, format);
   auto out = OIIO::ImageOutput::create(name);
-  if (!out) throw InternalError(name + ": no image writer for this extension");
+  if (!out) throw InternalError(shown_name(name) + ": no image writer for this extension");
   std::string extension = path.extension().string();
   std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   const OIIO::ImageSpec spec = spec_of(image, format, image.metadata, extension == ".png");
-  if (!out->open(name, spec)) throw InternalError(name + ": cannot open for writing: " + out->geterror());
-  if (!write_pixels(*out, image, format) || !out->close()) throw InternalError(name + ": cannot write image: " + out->geterror());
+  if (!out->open(name, spec)) throw InternalError(shown_name(name) + ": cannot open for writing: " + out->geterror());
+  if (!write_pixels(*out, image, format) || !out->close()) throw InternalError(shown_name(name) + ": cannot write image: " + out->geterror());
 }
 
 void write_image_levels(const std::vector<Image>& levels, const fs::path& path, PixelFormat format) {
   const std::string name = path.string();
-  if (levels.empty()) throw InternalError(name + ": no levels to write");
+  if (levels.empty()) throw InternalError(shown_name(name) + ": no levels to write");
   for (size_t k = 0; k < levels.size(); ++k) {
     check_writable(levels[k], name, format);
-    if (levels[k].channels != levels[0].channels) throw InternalError(name + ": levels differ in channel count");
+    if (levels[k].channels != levels[0].channels) throw InternalError(shown_name(name) + ": levels differ in channel count");
     if (k > 0 && (levels[k].width != std::max(1, levels[k - 1].width / 2) || levels[k].height != std::max(1, levels[k - 1].height / 2)))
-      throw InternalError(name + ": level sizes do not halve (rounding down) from one level to the next");
+      throw InternalError(shown_name(name) + ": level sizes do not halve (rounding down) from one level to the next");
   }
-  if (format != PixelFormat::float32 && format != PixelFormat::half) throw InternalError(name + ": MIP levels are written as EXR only");
+  if (format != PixelFormat::float32 && format != PixelFormat::half) throw InternalError(shown_name(name) + ": MIP levels are written as EXR only");
   auto out = OIIO::ImageOutput::create(name);
-  if (!out || !out->supports("mipmap")) throw InternalError(name + ": this format cannot hold MIP levels (use .exr)");
+  if (!out || !out->supports("mipmap")) throw InternalError(shown_name(name) + ": this format cannot hold MIP levels (use .exr)");
   for (size_t k = 0; k < levels.size(); ++k) {
     OIIO::ImageSpec spec = spec_of(levels[k], format, k == 0 ? levels[0].metadata : ImageMetadata{});
     // A tiled, MIP-mapped EXR (OpenEXR's MIPMAP_LEVELS, rounding down).
@@ -282,10 +282,10 @@ void write_image_levels(const std::vector<Image>& levels, const fs::path& path, 
     spec.attribute("openexr:levelmode", 1);
     spec.attribute("textureformat", "Plain Texture");
     const auto mode = k == 0 ? OIIO::ImageOutput::Create : OIIO::ImageOutput::AppendMIPLevel;
-    if (!out->open(name, spec, mode)) throw InternalError(name + ": cannot open for writing: " + out->geterror());
-    if (!write_pixels(*out, levels[k], format)) throw InternalError(name + ": cannot write level " + std::to_string(k) + ": " + out->geterror());
+    if (!out->open(name, spec, mode)) throw InternalError(shown_name(name) + ": cannot open for writing: " + out->geterror());
+    if (!write_pixels(*out, levels[k], format)) throw InternalError(shown_name(name) + ": cannot write level " + std::to_string(k) + ": " + out->geterror());
   }
-  if (!out->close()) throw InternalError(name + ": cannot write image: " + out->geterror());
+  if (!out->close()) throw InternalError(shown_name(name) + ": cannot write image: " + out->geterror());
 }
 
 std::vector<Image> read_image_levels(const fs::path& path) {
@@ -298,9 +298,9 @@ std::vector<Image> read_image_levels(const fs::path& path) {
 void write_image_parts(const std::vector<Image>& parts, const fs::path& path, PixelFormat format) {
   const std::string name = path.string();
   for (const Image& part : parts) check_writable(part, name, format);
-  if (format != PixelFormat::float32 && format != PixelFormat::half) throw InternalError(name + ": parts are written as EXR only");
+  if (format != PixelFormat::float32 && format != PixelFormat::half) throw InternalError(shown_name(name) + ": parts are written as EXR only");
   auto out = OIIO::ImageOutput::create(name);
-  if (!out || !out->supports("multiimage")) throw InternalError(name + ": this format cannot hold several parts (use .exr)");
+  if (!out || !out->supports("multiimage")) throw InternalError(shown_name(name) + ": this format cannot hold several parts (use .exr)");
   std::vector<OIIO::ImageSpec> specs;
   // OpenEXR requires every part to share the display window: the largest part's extent.
   int full_w = 0, full_h = 0;
@@ -314,13 +314,13 @@ void write_image_parts(const std::vector<Image>& parts, const fs::path& path, Pi
     specs.back().full_width = full_w;
     specs.back().full_height = full_h;
   }
-  if (!out->open(name, static_cast<int>(specs.size()), specs.data())) throw InternalError(name + ": cannot open for writing: " + out->geterror());
+  if (!out->open(name, static_cast<int>(specs.size()), specs.data())) throw InternalError(shown_name(name) + ": cannot open for writing: " + out->geterror());
   for (size_t k = 0; k < parts.size(); ++k) {
     if (k > 0 && !out->open(name, specs[k], OIIO::ImageOutput::AppendSubimage))
-      throw InternalError(name + ": cannot add part " + std::to_string(k) + ": " + out->geterror());
-    if (!write_pixels(*out, parts[k], format)) throw InternalError(name + ": cannot write part " + std::to_string(k) + ": " + out->geterror());
+      throw InternalError(shown_name(name) + ": cannot add part " + std::to_string(k) + ": " + out->geterror());
+    if (!write_pixels(*out, parts[k], format)) throw InternalError(shown_name(name) + ": cannot write part " + std::to_string(k) + ": " + out->geterror());
   }
-  if (!out->close()) throw InternalError(name + ": cannot write image: " + out->geterror());
+  if (!out->close()) throw InternalError(shown_name(name) + ": cannot write image: " + out->geterror());
 }
 
 std::vector<Image> read_image_parts(const fs::path& path) {

@@ -118,26 +118,61 @@ std::string file_text(const fs::path& path, const std::string& name) {
 // lines are checked first, naming the line (one pass over the file, about 1.5 s per GB).
 // Returns the triangles of faces without texture indices when the file has some `vt` (assimp
 // gives their corners UV 0,0 silently).
+// Whether [t, end) is a number finite as a float, as meso stores it (1e39 would be read as
+// inf). One too small for a double (1e-400) is 0 to assimp, and here.
+bool float_number(const char* t, const char* end) {
+  const char* a = t + (*t == '+' ? 1 : 0);
+  double value = 0;
+  const auto [ptr, ec] = std::from_chars(a, end, value);
+  if (ptr != end) return false;
+  if (ec == std::errc::result_out_of_range) {
+    const char* e = std::find_if(a, end, [](char c) { return c == 'e' || c == 'E'; });
+    return e + 1 < end && e[1] == '-';  // underflow, not overflow
+  }
+  return ec == std::errc() && std::isfinite(static_cast<float>(value));
+}
+
 size_t check_obj_lines(const std::string& text, const std::string& name) {
   const auto blank = [](char c) { return c == ' ' || c == '\t' || c == '\r'; };
   long long texcoords = 0, largest = 0;
   size_t line = 0, largest_line = 0, untextured = 0;
   std::string largest_token;
+  // A statement continued over lines ending in '\' (assimp joins them): gathered in `joined`,
+  // then read from `statement`, named by its first line.
+  std::string joined, statement;
+  size_t first_line = 0;
   for (const char *p = text.data(), *end = p + text.size(); p < end;) {
     const char* eol = static_cast<const char*>(std::memchr(p, '\n', static_cast<size_t>(end - p)));
     if (!eol) eol = end;
     ++line;
     const char* q = p;
     p = eol + 1;
-    while (q < eol && blank(*q)) ++q;
-    const bool vt = eol - q > 2 && q[0] == 'v' && q[1] == 't' && blank(q[2]);
-    const bool v = eol - q > 1 && q[0] == 'v' && blank(q[1]);
-    const bool f = eol - q > 1 && q[0] == 'f' && blank(q[1]);
-    if (!vt && !v && !f) continue;
     const char* stop = static_cast<const char*>(std::memchr(q, '#', static_cast<size_t>(eol - q)));
     if (!stop) stop = eol;
+    const char* last = stop;
+    while (last > q && blank(last[-1])) --last;
+    if (last > q && last[-1] == '\\') {
+      if (joined.empty()) first_line = line;
+      joined.append(q, last - 1);
+      joined += ' ';
+      continue;
+    }
+    size_t statement_line = line;
+    if (!joined.empty()) {
+      joined.append(q, stop);
+      statement.swap(joined);
+      joined.clear();
+      q = statement.data();
+      stop = q + statement.size();
+      statement_line = first_line;
+    }
+    while (q < stop && blank(*q)) ++q;
+    const bool vt = stop - q > 2 && q[0] == 'v' && q[1] == 't' && blank(q[2]);
+    const bool v = stop - q > 1 && q[0] == 'v' && blank(q[1]);
+    const bool f = stop - q > 1 && q[0] == 'f' && blank(q[1]);
+    if (!vt && !v && !f) continue;
     q += vt ? 2 : 1;
-    const auto where = [&] { return "line " + std::to_string(line); };
+    const auto where = [&] { return "line " + std::to_string(statement_line); };
     size_t corners = 0, textured = 0, values = 0;
     while (q < stop) {
       while (q < stop && blank(*q)) ++q;
@@ -149,19 +184,12 @@ size_t check_obj_lines(const std::string& text, const std::string& name) {
         // x y z, then an optional w or r g b, which assimp reads or ignores: only the position's
         // three values are checked.
         if (++values > 3) break;
-        const char* a = t + (*t == '+' ? 1 : 0);
-        double value = 0;
-        const auto [ptr, ec] = std::from_chars(a, q, value);
-        if (ec != std::errc() || ptr != q || !std::isfinite(static_cast<float>(value)))
+        if (!float_number(t, q))
           throw InputError(name, where() + ": vertex coordinate '" + std::string(token) + "' is not a finite number (as a float)");
         continue;
       }
       if (vt) {
-        const char* a = t + (*t == '+' ? 1 : 0);
-        double value = 0;
-        const auto [ptr, ec] = std::from_chars(a, q, value);
-        // Finite as a float too: meso's UVs are floats, and 1e39 would be read as inf.
-        if (ec != std::errc() || ptr != q || !std::isfinite(static_cast<float>(value)))
+        if (!float_number(t, q))
           throw InputError(name, where() + ": texture coordinate '" + std::string(token) + "' is not a finite number (as a float)");
         continue;
       }
@@ -533,6 +561,7 @@ Mesh read_mesh(const fs::path& path, MeshReadReport* report) {
     // once, for every command.
     OpenMesh::Vec3d lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
     for (auto v : mesh.vertices()) {
+      if (mesh.is_isolated(v)) continue;  // no face uses it (PLY keeps such vertices, OBJ through assimp does not)
       const OpenMesh::Vec3d p = OpenMesh::vector_cast<OpenMesh::Vec3d>(mesh.point(v));
       lo.minimize(p);
       hi.maximize(p);

@@ -194,6 +194,22 @@ TEST(MeshIo, TruncatedPlyIsAnInputErrorNotAnAbort) {
   }
 }
 
+// Valid OBJ statements the checks must let through as assimp reads them: a `v` continued on
+// the next line with '\\', a coordinate too small for a double (0 to assimp), w and colours.
+TEST(MeshIo, ObjContinuationsAndTinyNumbersRead) {
+  test::TempDir dir;
+  test::write_text(dir / "c.obj", "v 0 0 \\\n0\nv 1e-400 0 0\nv 1 0 0 1\nv 0 1 0 0.5 0.5 0.5\nvt 0 \\\n 0\nvt 1 0\nvt 0 1\nf 1/1 3/2 4/3\n");
+  const Mesh m = read_mesh(dir / "c.obj");
+  EXPECT_EQ(m.n_faces(), 1u);
+  test::write_text(dir / "bad.obj", "v 0 0 0\nv 1 \\\n x 0\nv 0 1 0\nf 1 2 3\n");
+  try {
+    read_mesh(dir / "bad.obj");
+    ADD_FAILURE() << "x is no number";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("line 2: vertex coordinate 'x'"), std::string::npos) << e.what();
+  }
+}
+
 // Extents float arithmetic cannot hold are refused on reading, for every command: at 3e38
 // a bake wrote Inf into every texel, at 1e-39 frames wrote Inf curvatures. Within the range,
 // and without extent (one point), a mesh is read.

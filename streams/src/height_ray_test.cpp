@@ -182,9 +182,9 @@ TEST(ConeTrace, GrazingRaysDoNotStallOnTexelEdges) {
   }
 }
 
-// Where the pyramid walk stops early it reports no hit at S's minimum it never reached: a
-// clamped map left along its far edge (y = H, dy = 0) had reported one past the true first
-// hit; an empty map is no map.
+// Rays along a clamped map's edges (y = H, dy = 0: over the closed map) find the first hit,
+// where the walk had stopped at once and reported one at S's minimum, past it; a ray that
+// starts beyond the edge misses, as for the cone tracer; an empty map is no map.
 TEST(PyramidTrace, StoppedWalksDoNotGuessAHit) {
   const HeightField f = noise(12, 8, Border::clamp, 4);
   const MinMaxPyramid p = build_min_max_pyramid(f);
@@ -197,8 +197,8 @@ TEST(PyramidTrace, StoppedWalksDoNotGuessAHit) {
     double t_ref = 0;
     const bool ref = reference_hit(f, r, t_ref);
     const HeightHit got = trace_min_max_pyramid(f, p, r);
+    ASSERT_EQ(got.hit, ref) << y;
     if (got.hit) {
-      ASSERT_TRUE(ref) << y;
       EXPECT_LE(got.t, t_ref + 1e-6) << y;
       EXPECT_NEAR(below(f, r, got.t), 0.0, 1e-6) << y;
     }

@@ -210,10 +210,14 @@ HeightHit trace_min_max_pyramid(const HeightField& field, const MinMaxPyramid& p
   bool walked = true;
   while (t < t1) {
     const double x = r.x + (t + 1e-12 * (1 + t)) * r.dx, y = r.y + (t + 1e-12 * (1 + t)) * r.dy;
-    const double a = std::floor(x / w), b = std::floor(y / h);
-    if (field.border == Border::clamp && (a != 0 || b != 0)) {
-      walked = false;
-      break;
+    double a = std::floor(x / w), b = std::floor(y / h);
+    if (field.border == Border::clamp) {
+      // The one tile, closed: a ray along its far edge (y = H) is over the map.
+      if (!(x >= 0 && x <= w && y >= 0 && y <= h)) {
+        walked = false;
+        break;
+      }
+      a = b = 0;
     }
     HeightRay local = r;
     local.x -= a * w;

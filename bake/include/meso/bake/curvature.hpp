@@ -22,7 +22,8 @@ struct VertexCurvature {
 // One per vertex. Uses the 1-ring when it has at least 8 neighbours and determines the fit
 // well (singular values within a factor 100), else the 2-ring, else the 3-ring (the end of a
 // thin strip, whose 2-ring lies in two rows); a vertex whose 3-ring cannot determine it gets
-// zero curvature and rings = 0. Needs vertex normals. Curvatures
+// zero curvature and rings = 0, as does one whose curvature overflows float. Needs vertex
+// normals. Curvatures
 // are those of the fitted surface at the vertex (shape operator I^-1 II); directions are
 // its principal directions projected onto the vertex normal's tangent plane.
 std::vector<VertexCurvature> fit_curvature(const Mesh& mesh);

@@ -32,7 +32,7 @@ struct MeshReadReport {
 //    computed (angle-weighted) when the file has none;
 //  - non-manifold faces and faces with a repeated vertex are kept on separate vertices.
 // Throws InputError naming the file when it is missing, unreadable, has no triangles, has a
-// NaN/infinite coordinate, or its vertices' bounding-box diagonal lies outside
+// NaN/infinite coordinate, or the bounding-box diagonal of its faces' vertices lies outside
 // [kMinMeshSpan, kMaxMeshSpan] (0 is allowed: a mesh without extent), beyond which float
 // distances, areas and curvatures overflow or vanish.
 constexpr double kMinMeshSpan = 1e-30, kMaxMeshSpan = 1e36;
