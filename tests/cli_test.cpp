@@ -386,17 +386,21 @@ TEST(Cli, BadInputExitsThreeWithOneLineNamingTheFileAndNoOutput) {
 // are refused up front (exit 2, one line) instead of exhausting the machine.
 TEST(Cli, StreamsVdmRefusesATableBeyondItsMemoryLimit) {
   test::TempDir dir;
-  write_image(Image(64, 64, 1, 0.5f), dir / "h.exr", PixelFormat::float32);
-  const Result r = run("streams vdm " + (dir / "h.exr").string() + " -o " + (dir / "v.exr").string() + " --theta 256 --phi 1024");
+  write_image(Image(512, 512, 1, 0.5f), dir / "h.exr", PixelFormat::float32);
+  const Result r = run("streams vdm " + (dir / "h.exr").string() + " -o " + (dir / "v.exr").string() + " --theta 64 --phi 64");
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_EQ(lines(r.err), 1u) << r.err;
   EXPECT_NE(r.err.find("4.0 GiB"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "v.exr"));
+  // More directions than the compression can solve for in reasonable time, even on one texel
+  // (its covariance is directions x directions: 16384 had run for minutes).
+  write_image(Image(1, 1, 1, 0.5f), dir / "one.exr", PixelFormat::float32);
+  const Result many = run("streams vdm " + (dir / "one.exr").string() + " -o " + (dir / "v.exr").string() + " --theta 256 --phi 64");
+  EXPECT_EQ(many.code, 2) << many.err;
+  EXPECT_NE(many.err.find("16384 directions"), std::string::npos) << many.err;
+  EXPECT_FALSE(fs::exists(dir / "v.exr"));
 }
 
-// A height map with non-finite texels: every stream exits 3 with one line naming the file and
-// the first bad texel in row order (meso's writer refuses NaN, so the map holds infinities,
-// which take the same path as NaN: formats/src/image_io_oiio.cpp), and writes nothing.
 // A one-channel float EXR written with OpenEXR itself: meso's writer refuses non-finite
 // samples, and the inputs here must have them.
 void write_exr_as_is(const Image& image, const fs::path& path) {
@@ -410,6 +414,28 @@ void write_exr_as_is(const Image& image, const fs::path& path) {
   file.writePixels(image.height);
 }
 
+// A height map that states a broken mapping to object units (meso:height_scale 'nan') is
+// refused naming it; it had been dropped without a word, the raw values taken for heights.
+TEST(Cli, StreamsRefuseABrokenHeightMapping) {
+  test::TempDir dir;
+  Image img(4, 4, 1, 0.5f);
+  img.at(1, 1) = 0.75f;
+  img.metadata["height_bias"] = 0.0f;
+  for (const std::string scale : {"nan", "-1", "abc"}) {
+    img.metadata["height_scale"] = scale;
+    write_image(img, dir / "m.png", PixelFormat::uint16);
+    const Result r = run("streams cone " + (dir / "m.png").string() + " -o " + (dir / "c.exr").string());
+    EXPECT_EQ(r.code, 3) << scale << ": " << r.err;
+    EXPECT_NE(r.err.find("m.png: its meso:height_scale is not a finite number"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "c.exr"));
+  }
+  img.metadata["height_scale"] = 2.0f;
+  write_image(img, dir / "m.png", PixelFormat::uint16);
+  EXPECT_EQ(run("streams cone " + (dir / "m.png").string() + " -o " + (dir / "c.exr").string()).code, 0);
+}
+
+// A height map with non-finite texels: every stream exits 3 with one line naming the file and
+// the first bad texel in row order, and writes nothing.
 TEST(Cli, StreamsNameTheFirstNonFiniteTexel) {
   test::TempDir dir;
   Image bad(8, 6, 1, 0.5f);
@@ -772,6 +798,12 @@ TEST_F(Skeleton, WholePipeline) {
   EXPECT_EQ(foreign.code, 3);
   EXPECT_NE(foreign.err.find("dstream.bin"), std::string::npos) << foreign.err;
   EXPECT_FALSE(fs::exists(d / "f.png"));
+  // Missing, it names the command that makes it: dstream from the meshes, not the height map.
+  std::filesystem::create_directories(d / "none");
+  const Result missing = run("preview " + (d / "reduced.obj").string() + " --maps " + (d / "maps").string() + " --streams " +
+                             (d / "none").string() + " --method dstream --headless --png " + (d / "f.png").string());
+  EXPECT_EQ(missing.code, 3);
+  EXPECT_NE(missing.err.find("(meso streams dstream --low " + (d / "reduced.obj").string() + " --high HIGH_MESH -o "), std::string::npos) << missing.err;
 
   // A turntable: N frames around the mesh, numbered from the --png name, all written or none.
   const Result turntable = run("preview " + (d / "reduced.obj").string() + " --maps " + (d / "maps").string() +

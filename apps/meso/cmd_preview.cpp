@@ -280,9 +280,13 @@ void add_preview(CLI::App& app, Context& ctx) {
         const bool needed = args->compare ? std::find(wanted.begin(), wanted.end(), method) != wanted.end() : o.method == method;
         // Loaded when there: in a window (every method can be switched to), and for --compare all.
         const bool optional = args->compare ? all : !args->headless;
-        if (needed && !std::filesystem::exists(file))
-          throw InputError(file.string(), "missing: method " + method + " needs it (meso streams " + producer + " " +
-                                              (dir / "displacement.exr").string() + " -o " + file.string() + ")");
+        if (needed && !std::filesystem::exists(file)) {
+          // The command that makes it: dstream samples the high mesh over this base, the
+          // others read the height map.
+          const std::string from = producer == "dstream" ? "--low " + args->base + " --high HIGH_MESH" : (dir / "displacement.exr").string();
+          throw InputError(file.string(), "missing: method " + method + " needs it (meso streams " + producer + " " + from + " -o " +
+                                              file.string() + ")");
+        }
         if (!needed && (!optional || !std::filesystem::exists(file))) continue;
         try {
           load_stream(maps, base, method, file);

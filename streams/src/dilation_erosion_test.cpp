@@ -85,6 +85,12 @@ TEST(DilationErosion, EqualsTheBruteForceOnStructuredAndRandomMaps) {
     for (const HeightField& f : fields)
       for (const int radius : {0, 1, 2, 5, 20}) expect_brute_force(f, radius);
   }
+  // Under clamp every radius from the map's size on is one window, the whole map (the largest
+  // radius had padded each line by 2^20 a side); under wrap too.
+  for (const Border border : {Border::clamp, Border::wrap}) {
+    const HeightField f = test::noise(13, 7, border, 3);
+    EXPECT_EQ(dilation_erosion_map(f, 1 << 20).pixels, dilation_erosion_map(f, 13).pixels);
+  }
 }
 
 // The sizes and map families (32², 64²: noise, steps, a single-texel spike, all-zero,

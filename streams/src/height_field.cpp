@@ -51,6 +51,16 @@ float metadata_number(const ImageMetadata& m, const char* key) {
 }
 }  // namespace
 
+std::string height_mapping_problem(const ImageMetadata& metadata) {
+  const bool has_scale = metadata.count("height_scale") > 0, has_bias = metadata.count("height_bias") > 0;
+  if (!has_scale && !has_bias) return "";
+  if (has_scale != has_bias) return std::string("its meso:") + (has_scale ? "height_scale" : "height_bias") + " comes without meso:" + (has_scale ? "height_bias" : "height_scale");
+  const float scale = metadata_number(metadata, "height_scale"), bias = metadata_number(metadata, "height_bias");
+  if (!(std::isfinite(scale) && scale >= 0)) return "its meso:height_scale is not a finite number >= 0";
+  if (!std::isfinite(bias)) return "its meso:height_bias is not a finite number";
+  return "";
+}
+
 HeightField make_height_field(const Image& image, Border border) {
   HeightField hf;
   hf.border = border;

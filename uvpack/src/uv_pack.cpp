@@ -26,8 +26,9 @@ struct Frame {
   double x0 = 0, y0 = 0, w = 0, h = 0;
 };
 
-// A chart in "q" coordinates, q = (u, 1 - v): x right and y down like texel rows, so that
-// q * size is a pixel position (image.hpp).
+// A chart in "q" coordinates, q = (u, -v): x right and y down like texel rows. Charts are
+// moved to their boxes, so only differences matter; -v rather than image.hpp's 1 - v keeps
+// UVs near 0 apart (1 - 1e-17 is 1: a chart 1e-17 across had packed to a point, exit 0).
 struct Chart {
   std::vector<int> faces;
   std::vector<std::array<double, 6>> tris;  // q of the three corners, face_halfedges() order
@@ -609,7 +610,7 @@ UvPackReport pack_uv_charts(Mesh& mesh, const UvPackOptions& o) {
     for (size_t k = 0; k < 3; ++k) {
       const Vec2f uv = mesh.texcoord2D(hs[k]);
       t[2 * k] = uv[0];
-      t[2 * k + 1] = 1.0 - static_cast<double>(uv[1]);
+      t[2 * k + 1] = -static_cast<double>(uv[1]);
     }
     c.tris.push_back(t);
   }
@@ -763,7 +764,7 @@ UvPackReport pack_uv_charts(Mesh& mesh, const UvPackOptions& o) {
     for (int f : c.faces)
       for (auto h : face_halfedges(mesh, FaceHandle(f))) {
         const Vec2f uv = mesh.texcoord2D(h);
-        const auto q = turn(c, uv[0], 1.0 - static_cast<double>(uv[1]), p.orientation);
+        const auto q = turn(c, uv[0], -static_cast<double>(uv[1]), p.orientation);
         const double x = (q[0] * lo * c.factor + kInset + p.x) / n, y = (q[1] * lo * c.factor + kInset + p.y) / n;
         mesh.set_texcoord2D(h, Vec2f(static_cast<float>(x), static_cast<float>(1.0 - y)));
       }

@@ -145,6 +145,19 @@ TEST(UvPack, InputsThatPackFarBelowTheAreaBound) {
   }
 }
 
+// A chart 1e-17 across near UV (0, 0) keeps its shape: it had been taken at 1 - v, where
+// 1 - 1e-17 is 1, and packed to a single point with exit 0.
+TEST(UvPack, ATinyChartNearTheOriginKeepsItsArea) {
+  Mesh m = test::make_uv_quads({{0, 0, 1e-17f, 1e-17f}});
+  UvPackOptions o;
+  o.size = 256;
+  const UvPackReport r = pack_uv_charts(m, o);
+  EXPECT_GT(r.utilization, 0.5) << "one square chart fills most of the atlas";
+  const UvCheckReport c = check_packed(m, 256, 2);
+  EXPECT_TRUE(c.degenerate_faces.empty());
+  EXPECT_TRUE(c.outside_faces.empty());
+}
+
 // Written UVs are rounded to float, which moves a corner by up to size 2^-25 texels: with
 // charts packed edge to edge (padding 0), an edge a hair short of a texel line crossed it and
 // shared that texel with the next chart. The footprints reserve that margin.

@@ -39,8 +39,14 @@ inline float bilinear_blend(float a, float b, float c, float d, float tx, float 
 // map) and normalises it: bias = its minimum, scale = max - min (0 for a flat map, whose
 // normalised heights are all 0). A map whose metadata gives height_scale and height_bias
 // (bake's displacement.png: object = bias + scale * value) is taken back to object units
-// first.
+// first (a broken pair, see height_mapping_problem, is ignored here).
 HeightField make_height_field(const Image& image, Border border);
+
+// What is wrong with the map's own mapping to object units, or "" when it has none or a
+// usable one: a height_scale or height_bias that is present but not a finite number (and a
+// scale >= 0), or one given without the other. For a loader to refuse such a map, which
+// make_height_field would otherwise take as raw values.
+std::string height_mapping_problem(const ImageMetadata& metadata);
 
 // The header attributes every stream file carries about its height field: height_scale,
 // height_bias, height_units, border (docs/formats.md).
