@@ -203,20 +203,16 @@ HeightHit trace_min_max_pyramid(const HeightField& field, const MinMaxPyramid& p
   const int top = static_cast<int>(pyramid.levels.size()) - 1;
   const double w = pyramid.levels[0].width, h = pyramid.levels[0].height;
   // The tiles the ray's path crosses, in order (one tile under Border::clamp), each traced
-  // with the ray's origin moved into the tile: texel numbers stay those of one tile. `walked`:
-  // the walk reached t1 (not stopped by leaving a clamped map or by a path too far out for
-  // its steps to progress in double).
+  // with the ray's origin moved into the tile: texel numbers stay those of one tile. The walk
+  // ends with t >= t1 unless it stopped early: leaving a clamped map, or a path too far out
+  // for its steps to progress in double.
   double t = t0;
-  bool walked = true;
   while (t < t1) {
     const double x = r.x + (t + 1e-12 * (1 + t)) * r.dx, y = r.y + (t + 1e-12 * (1 + t)) * r.dy;
     double a = std::floor(x / w), b = std::floor(y / h);
     if (field.border == Border::clamp) {
       // The one tile, closed: a ray along its far edge (y = H) is over the map.
-      if (!(x >= 0 && x <= w && y >= 0 && y <= h)) {
-        walked = false;
-        break;
-      }
+      if (!(x >= 0 && x <= w && y >= 0 && y <= h)) break;
       a = b = 0;
     }
     HeightRay local = r;
@@ -233,16 +229,13 @@ HeightHit trace_min_max_pyramid(const HeightField& field, const MinMaxPyramid& p
       out.t = t_hit;
       return out;
     }
-    if (!(tb > t)) {  // no progress (a degenerate path): stop
-      walked = false;
-      break;
-    }
+    if (!(tb > t)) break;  // no progress (a degenerate path): stop
     t = tb;
   }
-  // Walked over the map down to S's lowest point, the ray is at or below S: it met S by then.
+  // Walked over the map (t reached t1) down to S's lowest point, the ray is at or below S: it met S by then.
   // Found here when rounding put the ray a hair above a floor at exactly that height (a flat
   // map, or a pit at the map's minimum), where the tiles' tests see z(below) ~ +1e-16 over it.
-  if (walked && below <= above) {
+  if (t >= t1 && below <= above) {
     const double x = r.x + below * r.dx, y = r.y + below * r.dy;
     if (field.border == Border::wrap || (x >= 0 && x <= w && y >= 0 && y <= h)) {
       out.hit = true;
