@@ -1,6 +1,7 @@
 #include "meso/uvpack/uv_pack.hpp"
 
 #include "meso/core/uv_texels.hpp"
+#include "free_rows.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -268,39 +269,6 @@ class RowMax {
   std::vector<int> tree_;
 };
 
-// Per row, the free texels' remaining run lengths (rem[c]: free texels from column c on, 0 where
-// blocked) in a max tree, answering "the first column >= from where a free run of at least
-// `need` texels continues" in O(log n): a footprint run skips every hole too short for it at
-// once, instead of one hole per step (a full atlas has hundreds of short holes per row).
-class RowRuns {
- public:
-  RowRuns(int rows, int columns) : size_(1) {
-    while (size_ < columns) size_ *= 2;
-    tree_.assign(static_cast<size_t>(rows) * 2 * static_cast<size_t>(size_), 0);
-  }
-  int* leaves(int row) { return tree_.data() + static_cast<size_t>(row) * 2 * static_cast<size_t>(size_) + static_cast<size_t>(size_); }
-  int rem(int row, int column) const { return tree_[base(row) + static_cast<size_t>(size_) + static_cast<size_t>(column)]; }
-  void rebuild(int row) {
-    int* t = tree_.data() + base(row);
-    for (int i = size_ - 1; i >= 1; --i) t[i] = std::max(t[2 * i], t[2 * i + 1]);
-  }
-  int longest(int row) const { return tree_[base(row) + 1]; }
-  // After leaves [l, r] of the row changed: their ancestors, level by level.
-  void update(int row, int l, int r) {
-    int* t = tree_.data() + base(row);
-    for (size_t lo = (static_cast<size_t>(l) + static_cast<size_t>(size_)) / 2, hi = (static_cast<size_t>(r) + static_cast<size_t>(size_)) / 2; lo >= 1;
-         lo /= 2, hi /= 2)
-      for (size_t i = lo; i <= hi; ++i) t[i] = std::max(t[2 * i], t[2 * i + 1]);
-  }
-  // The first column >= from with rem >= need (> 0), or -1.
-  int first_at_least(int row, int from, int need) const { return first_leaf_at_least(tree_.data() + base(row), size_, from, need); }
-
- private:
-  size_t base(int row) const { return static_cast<size_t>(row) * 2 * static_cast<size_t>(size_); }
-  int size_;
-  std::vector<int> tree_;
-};
-
 // One greedy packing at a scale: whether every chart found room, where, and how far it got,
 // which aims the scale search's next attempt.
 struct Attempt {
@@ -341,62 +309,21 @@ Attempt place_all(const std::vector<Chart>& charts, const Footprints& prints, co
   // that no placed chart blocks, so once fewer are free the packing has failed; stopping there
   // changes the work, not the outcome.
   size_t remaining = need, free_inside = inside;
-  // Texels within `pad` of a placed chart's texel (Chebyshev): a new chart's texels must
-  // avoid them. next_free[row * n + col]: the first unblocked column >= col in the row (n
-  // if none), so a scan jumps over blocked runs instead of stepping through them; runs: the
-  // free run lengths per row (a run of a footprint row fits at c0 when rem(c0) >= its length).
-  std::vector<uint8_t> blocked(static_cast<size_t>(n) * static_cast<size_t>(n), 0);
-  std::vector<int> next_free(static_cast<size_t>(n) * static_cast<size_t>(n));
-  RowRuns runs_free(n, n);
+  // Texels within `pad` of a placed chart's texel (Chebyshev) are blocked: a new chart's
+  // texels must avoid them.
+  FreeRows free_rows(n);
   // longest_free: per row the longest free run, so whole rows without room for a footprint's
   // widest run are skipped at once.
   RowMax longest_free(n);
-  // Takes the unblocked texels of columns [a, b] of a row inside the margin off free_inside,
-  // before they are blocked.
-  auto count_free = [&](int row, int a, int b) {
-    if (row < margin || row >= n - margin) return;
-    a = std::max(a, margin);
-    b = std::min(b, n - margin - 1);
-    const auto first = blocked.begin() + static_cast<std::ptrdiff_t>(static_cast<size_t>(row) * static_cast<size_t>(n));
-    if (a <= b) free_inside -= static_cast<size_t>(std::count(first + a, first + b + 1, uint8_t{0}));
-  };
-  auto refresh_row = [&](int row) {
-    int free_col = n, blocked_col = n;
-    int* rem = runs_free.leaves(row);
-    for (int col = n - 1; col >= 0; --col) {
-      const size_t k = static_cast<size_t>(row) * static_cast<size_t>(n) + static_cast<size_t>(col);
-      if (blocked[k]) blocked_col = col;
-      else free_col = col;
-      next_free[k] = free_col;
-      rem[col] = blocked_col - col;
-    }
-    runs_free.rebuild(row);
-    longest_free.set(row, runs_free.longest(row));
-  };
-  // Blocks columns [a, b] of a row and updates what depends on them: only the columns from
-  // the stretch just left of a (free texels whose run now ends at a, or blocked ones whose next
-  // free texel was in [a, b]) to b change; the same state refresh_row would compute.
+  // Blocks columns [a, b] of a row, taking the free ones inside the margin off free_inside;
+  // the row's longest free run is refreshed once the chart is placed.
   auto block_range = [&](int row, int a, int b) {
-    const size_t base = static_cast<size_t>(row) * static_cast<size_t>(n);
-    int* rem = runs_free.leaves(row);
-    count_free(row, a, b);
-    std::fill(blocked.begin() + static_cast<std::ptrdiff_t>(base + static_cast<size_t>(a)),
-              blocked.begin() + static_cast<std::ptrdiff_t>(base + static_cast<size_t>(b) + 1), uint8_t{1});
-    const int after = b + 1 < n ? next_free[base + static_cast<size_t>(b) + 1] : n;
-    for (int c = a; c <= b; ++c) {
-      next_free[base + static_cast<size_t>(c)] = after;
-      rem[c] = 0;
+    if (row >= margin && row < n - margin && std::max(a, margin) <= std::min(b, n - margin - 1)) {
+      free_inside -= free_rows.take(row, std::max(a, margin), std::min(b, n - margin - 1));
     }
-    int l = a;
-    if (a > 0 && blocked[base + static_cast<size_t>(a) - 1]) {
-      for (int c = a - 1; c >= 0 && blocked[base + static_cast<size_t>(c)]; --c, l = c + 1) next_free[base + static_cast<size_t>(c)] = after;
-    } else {
-      for (int c = a - 1; c >= 0 && !blocked[base + static_cast<size_t>(c)]; --c, l = c + 1) rem[c] = a - c;
-    }
-    runs_free.update(row, l, b);
-    longest_free.set(row, runs_free.longest(row));
+    free_rows.take(row, a, b);
   };
-  for (int row = 0; row < n; ++row) refresh_row(row);
+  for (int row = 0; row < n; ++row) longest_free.set(row, free_rows.longest(row));
   where.assign(charts.size(), Placement{});
   int bottom = margin;  // the first row below every placed chart
   for (size_t c : order) {
@@ -412,13 +339,11 @@ Attempt place_all(const std::vector<Chart>& charts, const Footprints& prints, co
     auto scan = [&](int r) {
       const Footprint& fp = prints[c][static_cast<size_t>(r)];
       const int bw = fp.bw, bh = fp.bh, off = key_offset(r);
-      // Runs tested widest first: they are the likeliest to be blocked; a run found blocked at a
-      // candidate moves halfway to the front, as the next candidates tend to meet the same
-      // obstacle (5 % fewer instructions on irregular charts). Any blocked run gives a valid jump,
-      // so the order changes the work, not the fit found.
+      // Runs tested widest first: they are the likeliest to be blocked; a run that rules out a
+      // word of candidates moves halfway to the front, as the next words tend to meet the same
+      // obstacle. A fit needs every run free, so the order changes the work, not the fit found.
       std::vector<std::array<int, 3>> runs = fp.runs;
       std::stable_sort(runs.begin(), runs.end(), [](const auto& p, const auto& q) { return p[2] - p[1] > q[2] - q[1]; });
-      const std::array<int, 3> w0 = runs.front();
       // The footprint's widest run (row offset, length): rows without a free run that long
       // are skipped through the row maximum.
       int wide_row = 0, wide = 0;
@@ -448,26 +373,22 @@ Attempt place_all(const std::vector<Chart>& charts, const Footprints& prints, co
           y = skip - 1;  // the loop's ++y lands on it
           continue;
         }
-        int x = margin;
-        while (x + bw <= n - margin) {
-          // The widest run first, through its row's tree: the next column where it fits.
-          const int c0 = runs_free.first_at_least(y + w0[0], x + w0[1], w0[2] - w0[1] + 1);
-          if (c0 < 0) break;
-          x = c0 - w0[1];
-          if (x + bw > n - margin) break;
-          int jump = -1;
-          for (size_t i = 0; i < runs.size(); ++i) {
+        // The row's candidate columns [margin, n - margin - bw] 64 at a time, as a mask that
+        // each run narrows to the starts where its row is free; the lowest bit left is the
+        // leftmost fit.
+        const int x_last = n - margin - bw;
+        for (int x0 = margin / 64 * 64; x0 <= x_last; x0 += 64) {
+          uint64_t fit_mask = ~uint64_t{0} << (std::max(margin - x0, 0));
+          if (x_last - x0 < 63) fit_mask &= ~uint64_t{0} >> (63 - (x_last - x0));
+          for (size_t i = 0; i < runs.size() && fit_mask != 0; ++i) {
             const auto run = runs[i];
             const int row = y + run[0];
-            const int hit = x + run[1] + runs_free.rem(row, x + run[1]);  // the first blocked column from the run's start
-            if (hit <= x + run[2]) {
-              // The run must start past the blocked stretch that begins at `hit`.
-              jump = next_free[static_cast<size_t>(row) * static_cast<size_t>(n) + static_cast<size_t>(hit)] - run[1];
-              std::swap(runs[i], runs[i / 2]);  // a blocked run moves halfway to the front (see above)
-              break;
-            }
+            for (int at = run[1]; at <= run[2] && fit_mask != 0; at += 64)
+              fit_mask &= free_rows.starts(row, x0 + at, std::min(64, run[2] - at + 1));
+            if (fit_mask == 0) std::swap(runs[i], runs[i / 2]);
           }
-          if (jump < 0) {
+          if (fit_mask != 0) {
+            const int x = x0 + __builtin_ctzll(fit_mask);
             fit[static_cast<size_t>(r)] = {r, x, y};
             fits[static_cast<size_t>(r)] = true;
             int seen = lowest_key.load(std::memory_order_relaxed);
@@ -475,7 +396,6 @@ Attempt place_all(const std::vector<Chart>& charts, const Footprints& prints, co
             }
             return;
           }
-          x = std::max(x + 1, jump);
         }
       }
     };
@@ -522,11 +442,13 @@ Attempt place_all(const std::vector<Chart>& charts, const Footprints& prints, co
     best_texels.reserve(placed.texels);
     for (const auto& run : placed.runs)
       for (int x = run[1]; x <= run[2]; ++x) best_texels.push_back({best.x + x, best.y + run[0]});
-    int row0 = n, row1 = -1;
+    int row0 = n, row1 = -1;  // the rows blocked in
     for (const auto& run : placed.runs) {
       // A run dilated by the padding: a box of rows and columns.
       const int ty = best.y + run[0], x0 = std::max(0, best.x + run[1] - pad), x1 = std::min(n - 1, best.x + run[2] + pad);
       for (int y = std::max(0, ty - pad); y <= std::min(n - 1, ty + pad); ++y) block_range(y, x0, x1);
+      row0 = std::min(row0, std::max(0, ty - pad));
+      row1 = std::max(row1, std::min(n - 1, ty + pad));
     }
     // Mip-safe levels (uv_pack.hpp): the chart's level-k texels dilated by m_k - 1 block
     // every level-0 texel inside them.
@@ -557,16 +479,13 @@ Attempt place_all(const std::vector<Chart>& charts, const Footprints& prints, co
         if (!any) continue;
         for (int y = cy * b; y < (cy + 1) * b; ++y) {
           for (int cx = 0; cx < cn; ++cx)
-            if (row[static_cast<size_t>(cx)]) {
-              count_free(y, cx * b, cx * b + b - 1);
-              std::fill_n(blocked.begin() + static_cast<std::ptrdiff_t>(static_cast<size_t>(y) * static_cast<size_t>(n) + static_cast<size_t>(cx * b)), b, uint8_t{1});
-            }
+            if (row[static_cast<size_t>(cx)]) block_range(y, cx * b, cx * b + b - 1);
           row0 = std::min(row0, y);
           row1 = std::max(row1, y);
         }
       }
     }
-    for (int row = row0; row <= row1; ++row) refresh_row(row);
+    for (int row = row0; row <= row1; ++row) longest_free.set(row, free_rows.longest(row));
     if (remaining > free_inside) {
       result.fill = static_cast<double>(need - remaining + free_inside) / static_cast<double>(need);
       return result;
