@@ -401,6 +401,23 @@ TEST(Cli, StreamsVdmRefusesATableBeyondItsMemoryLimit) {
   EXPECT_FALSE(fs::exists(dir / "v.exr"));
 }
 
+// --max-error is met within --max-rank components; when they fall short the command still
+// writes the table (its error is in the report) but says so, naming the knob to raise.
+TEST(Cli, StreamsVdmWarnsWhenTheRankCapMissesTheError) {
+  test::TempDir dir;
+  Image h(16, 16, 1);
+  for (int y = 0; y < 16; ++y)
+    for (int x = 0; x < 16; ++x) h.at(x, y) = static_cast<float>((x * 7 + y * 13) % 11) / 10.0f;
+  write_image(h, dir / "h.exr", PixelFormat::float32);
+  const std::string base = "streams vdm " + (dir / "h.exr").string() + " -o " + (dir / "v.exr").string() + " --theta 4 --phi 4 --relief 0.5";
+  const Result capped = run(base + " --max-rank 1 --max-error 1e-6");
+  ASSERT_EQ(capped.code, 0) << capped.err;
+  EXPECT_NE(capped.err.find("--max-rank 1 components were not enough"), std::string::npos) << capped.err;
+  const Result met = run(base + " --max-rank 64 --max-error 1");
+  ASSERT_EQ(met.code, 0) << met.err;
+  EXPECT_EQ(met.err.find("were not enough"), std::string::npos) << met.err;
+}
+
 // A one-channel float EXR written with OpenEXR itself: meso's writer refuses non-finite
 // samples, and the inputs here must have them.
 void write_exr_as_is(const Image& image, const fs::path& path) {

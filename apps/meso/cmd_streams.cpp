@@ -225,8 +225,8 @@ void add_streams(CLI::App& app, Context& ctx) {
   vdm_cmd->add_option("--mesh", vdm->mesh, "Base mesh: relief from its size (unless --relief) and curvature slices from quadric fits (unless --curvatures)");
   vdm_cmd->add_option("--curvature-steps", vdm->curvature_steps, "With --mesh: curvature samples over the mesh's range (5th percentile of k2 to 95th of k1; 1: the median mean curvature)")->check(CLI::Range(1, 64))->capture_default_str();
   vdm_cmd->add_option("--relief", vdm->options.relief, "Height range in units of u (default 0.1, or from --mesh)")->check(InRange(1e-9, kVdmMaxRelief));
-  vdm_cmd->add_option("--max-error", vdm->max_error, "Largest RMS error of the compressed table, units of u")->check(NonNegative)->capture_default_str();
-  vdm_cmd->add_option("--max-rank", vdm->max_rank, "Largest number of PCA components")->check(CLI::Range(0, 4096))->capture_default_str();
+  vdm_cmd->add_option("--max-error", vdm->max_error, "Largest RMS error of the compressed table, units of u (within --max-rank components: a warning when they fall short)")->check(NonNegative)->capture_default_str();
+  vdm_cmd->add_option("--max-rank", vdm->max_rank, "Largest number of PCA components (meso preview takes at most 64)")->check(CLI::Range(0, 4096))->capture_default_str();
   vdm_cmd->callback([&ctx, vdm_args, vdm, vdm_cmd] {
     vdm->relief_given = vdm_cmd->count("--relief") > 0;
     ctx.run = [&ctx, vdm_args, vdm](nlohmann::json& report, Progress& progress) {
@@ -314,6 +314,9 @@ void add_streams(CLI::App& app, Context& ctx) {
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       const size_t raw = table.distance.size() * sizeof(float);
       info(ctx.globals, "wrote " + vdm_args->output + " (rank " + std::to_string(c.rank) + ", RMS error " + short_number(c.rms_error) + ")");
+      if (c.rms_error > vdm->max_error)
+        warn(ctx.globals, vdm_args->output + ": RMS error " + short_number(c.rms_error) + " is above --max-error " + short_number(vdm->max_error) +
+                              ": --max-rank " + std::to_string(vdm->max_rank) + " components were not enough (raise --max-rank)");
       report = {{"command", "streams vdm"},
                 {"input", vdm_args->input},
                 {"output", vdm_args->output},

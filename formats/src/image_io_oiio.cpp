@@ -16,6 +16,7 @@
 #include <filesystem>
 #include <limits>
 #include <memory>
+#include <sstream>
 
 namespace meso {
 
@@ -145,6 +146,15 @@ Image read_level(OIIO::ImageInput& in, const std::string& name, int level, int s
   const std::string err = in.geterror();
   if (!read || !err.empty())
     throw InputError(name, "cannot read image data: " + (err.empty() ? std::string("unknown error") : err.substr(0, err.find('\n'))));
+  // TIFF: "meso:key=value" lines of ImageDescription (write_image), as text like PNG's.
+  if (std::string(in.format_name()) == "tiff") {
+    std::istringstream lines(spec.get_string_attribute("ImageDescription"));
+    for (std::string line; std::getline(lines, line);) {
+      const size_t eq = line.find('=');
+      if (line.rfind(kPrefix, 0) == 0 && eq != std::string::npos)
+        img.metadata[line.substr(std::char_traits<char>::length(kPrefix), eq - std::char_traits<char>::length(kPrefix))] = line.substr(eq + 1);
+    }
+  }
   for (const auto& p : spec.extra_attribs) {
     const std::string key = p.name().string();
     if (key.rfind(kPrefix, 0) != 0) continue;
@@ -205,11 +215,11 @@ void check_writable(const Image& image, const std::string& name, PixelFormat for
   }
 }
 
-OIIO::ImageSpec spec_of(const Image& image, PixelFormat format, const ImageMetadata& metadata, bool text_only = false) {
+OIIO::ImageSpec spec_of(const Image& image, PixelFormat format, const ImageMetadata& metadata, bool text_only = false, bool numbered = false) {
   OIIO::ImageSpec spec(image.width, image.height, image.channels, type_of(format));
-  // Beyond RGBA, name channels so that their sorted order (EXR stores channels sorted by
-  // name) is their index order: c000, c001, ...
-  if (image.channels > 4) {
+  // Beyond RGBA (or when asked, for more than one channel), name channels so that their
+  // sorted order (EXR stores channels sorted by name) is their index order: c000, c001, ...
+  if (image.channels > 4 || (numbered && image.channels > 1)) {
     spec.channelnames.clear();
     char name[16];
     for (int c = 0; c < image.channels; ++c) {
@@ -258,7 +268,19 @@ void write_image(const Image& image, const fs::path& path, PixelFormat format) {
   if (!out) throw InternalError(shown_name(name) + ": no image writer for this extension");
   std::string extension = path.extension().string();
   std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  const OIIO::ImageSpec spec = spec_of(image, format, image.metadata, extension == ".png");
+  const bool tiff = extension == ".tif" || extension == ".tiff";
+  OIIO::ImageSpec spec = spec_of(image, format, image.metadata, extension == ".png" || tiff);
+  if (tiff) {
+    // TIFF has no free-form attributes (OIIO drops them): the metadata goes into the
+    // ImageDescription tag as "meso:key=value" lines, which read_level() parses back.
+    std::string description;
+    for (const auto& p : spec.extra_attribs) {
+      const std::string key = p.name().string();
+      if (key.rfind(kPrefix, 0) == 0) description += key + "=" + p.get_string() + "\n";
+    }
+    for (const auto& [k, v] : image.metadata) spec.erase_attribute(std::string(kPrefix) + k);
+    if (!description.empty()) spec.attribute("ImageDescription", description);
+  }
   if (!out->open(name, spec)) throw InternalError(shown_name(name) + ": cannot open for writing: " + out->geterror());
   if (!write_pixels(*out, image, format) || !out->close()) throw InternalError(shown_name(name) + ": cannot write image: " + out->geterror());
 }
@@ -309,7 +331,7 @@ void write_image_parts(const std::vector<Image>& parts, const fs::path& path, Pi
     full_h = std::max(full_h, part.height);
   }
   for (const Image& part : parts) {
-    specs.push_back(spec_of(part, format, part.metadata));
+    specs.push_back(spec_of(part, format, part.metadata, false, true));
     specs.back().full_x = specs.back().full_y = 0;
     specs.back().full_width = full_w;
     specs.back().full_height = full_h;

@@ -3,6 +3,9 @@
 #include "meso/core/error.hpp"
 #include "test_support.hpp"
 
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfMultiPartInputFile.h>
 #include <gtest/gtest.h>
 
 #include <limits>
@@ -57,6 +60,26 @@ TEST(ImageIo, MultiPartExrKeepsEachPart) {
   EXPECT_EQ(std::get<int>(parts[0].metadata.at("rank")), 7);
   EXPECT_EQ(parts[1].pixels, b.pixels);
   EXPECT_EQ(std::get<std::string>(parts[1].metadata.at("what")), "basis");
+}
+
+// A part's channels are c000, c001, ... at any count above one (RGBA's names at four or fewer
+// would be stored as A, B, G, R: a reader by name or by stored order would lose the index
+// order), and Y alone; read from the file with OpenEXR itself, not through meso's reader.
+TEST(ImageIo, MultiPartExrNamesChannelsByIndex) {
+  test::TempDir dir;
+  Image one(3, 2, 1, 0.5f), three(3, 2, 3, 0.25f), four(4, 1, 4, 1.0f);
+  write_image_parts({three, one, four}, dir / "n.exr", PixelFormat::half);
+  Imf::MultiPartInputFile file((dir / "n.exr").c_str());
+  ASSERT_EQ(file.parts(), 3);
+  auto names = [&](int part) {
+    std::vector<std::string> out;
+    const Imf::ChannelList& list = file.header(part).channels();
+    for (auto c = list.begin(); c != list.end(); ++c) out.emplace_back(c.name());
+    return out;
+  };
+  EXPECT_EQ(names(0), (std::vector<std::string>{"c000", "c001", "c002"}));
+  EXPECT_EQ(names(1), (std::vector<std::string>{"Y"}));
+  EXPECT_EQ(names(2), (std::vector<std::string>{"c000", "c001", "c002", "c003"}));
 }
 
 TEST(ImageIo, Png16RoundTripWithinHalfAStep) {
@@ -161,6 +184,22 @@ TEST(ImageIo, DamagedPngIsAnInputError) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("bad.png: cannot read image data"), std::string::npos) << e.what();
   }
+}
+
+// TIFF has no free-form attributes: the metadata travels in ImageDescription and reads back
+// as text, as PNG's does (the previewer's 8-bit height TIFF needs its bias and scale).
+TEST(ImageIo, TiffKeepsMetadataAsText) {
+  test::TempDir dir;
+  Image img = ramp(8, 4, 4);
+  img.metadata = {{"method", std::string("pom")}, {"height_scale", 0.125f}, {"iterations", 32}};
+  write_image(img, dir / "h.tif", PixelFormat::uint8);
+  const Image back = read_image(dir / "h.tif");
+  ASSERT_EQ(back.metadata.size(), 3u);
+  EXPECT_EQ(std::get<std::string>(back.metadata.at("method")), "pom");
+  EXPECT_EQ(std::stof(std::get<std::string>(back.metadata.at("height_scale"))), 0.125f);
+  EXPECT_EQ(std::get<std::string>(back.metadata.at("iterations")), "32");
+  write_image(img, dir / "g.tif", PixelFormat::uint8);
+  EXPECT_EQ(test::read_text(dir / "h.tif"), test::read_text(dir / "g.tif"));
 }
 
 TEST(ImageIo, WritesAreDeterministic) {

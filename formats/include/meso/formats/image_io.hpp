@@ -34,7 +34,9 @@ void write_image_levels(const std::vector<Image>& levels, const std::filesystem:
 std::vector<Image> read_image_levels(const std::filesystem::path& path);
 
 // Writes several images as the parts of one multi-part EXR (OpenEXR multi-part, OIIO
-// subimages), in order, each with its own size, channels and metadata.
+// subimages), in order, each with its own size, channels and metadata. A part's channels are
+// named c000, c001, ... (sorted by name, as EXR stores them, in index order), whatever
+// their count; a part of one channel is Y.
 void write_image_parts(const std::vector<Image>& parts, const std::filesystem::path& path, PixelFormat format);
 
 // Reads every part of a multi-part image file (one part for ordinary files).
