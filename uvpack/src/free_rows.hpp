@@ -60,6 +60,17 @@ class FreeRows {
     }
     return std::max(best, run);
   }
+  // The first column c >= from where columns [c, c + length) of the row are all free
+  // (length >= 1), or -1: a walk over the row's free runs, a word of blocked columns at a
+  // time.
+  int next_fit(int row, int from, int length) const {
+    for (int c = first_free(row, from); c >= 0;) {
+      const int end = first_blocked(row, c);
+      if (end - c >= length) return c;
+      c = first_free(row, end);
+    }
+    return -1;
+  }
   // Bit j set when columns [s + j, s + j + length - 1] of the row are all free, for j in
   // [0, 64) (0 <= s < n + 64, 1 <= length <= 64): the 128 bits from s ANDed with themselves
   // shifted by doubling distances (log2 length steps), reading no bit past s + 127.
@@ -82,6 +93,26 @@ class FreeRows {
   }
 
  private:
+  // The first free column >= c of the row, or -1.
+  int first_free(int row, int c) const {
+    size_t i = static_cast<size_t>(c) / 64;
+    if (i >= words_) return -1;
+    const uint64_t* w = bits_.data() + index(row, 0);
+    uint64_t x = w[i] & (~uint64_t{0} << (c % 64));
+    while (x == 0) {
+      if (++i == words_) return -1;
+      x = w[i];
+    }
+    return static_cast<int>(i * 64) + __builtin_ctzll(x);
+  }
+  // The first blocked column >= c (c below n + 64): the zero words past the row's end stop it.
+  int first_blocked(int row, int c) const {
+    const uint64_t* w = bits_.data() + index(row, 0);
+    size_t i = static_cast<size_t>(c) / 64;
+    uint64_t x = ~w[i] & (~uint64_t{0} << (c % 64));
+    while (x == 0) x = ~w[++i];
+    return static_cast<int>(i * 64) + __builtin_ctzll(x);
+  }
   size_t index(int row, int c) const { return static_cast<size_t>(row) * words_ + static_cast<size_t>(c) / 64; }
   size_t words_;
   std::vector<uint64_t> bits_;

@@ -41,6 +41,16 @@ TEST(FreeRows, MatchesTheDefinitionsUnderRandomBlocking) {
       const auto& want = ref[static_cast<size_t>(row)];
       ASSERT_EQ(rows.longest(row), longest_run(want)) << "n " << n << " row " << row;
       for (int c = 0; c < n; ++c) ASSERT_EQ(rows.is_free(row, c), want[static_cast<size_t>(c)]);
+      // next_fit() from every column below n + 64, at lengths 1, 2, 3, 64, 65, n.
+      std::vector<int> rem(static_cast<size_t>(n) + 1, 0);  // free columns from c on
+      for (int c = n - 1; c >= 0; --c) rem[static_cast<size_t>(c)] = want[static_cast<size_t>(c)] ? rem[static_cast<size_t>(c) + 1] + 1 : 0;
+      for (int from = 0; from < n + 64; ++from)
+        for (int length : {1, 2, 3, 64, 65, n}) {
+          int expected = -1;
+          for (int c = from; c < n && expected < 0; ++c)
+            if (rem[static_cast<size_t>(c)] >= length) expected = c;
+          ASSERT_EQ(rows.next_fit(row, from, length), expected) << "n " << n << " from " << from << " length " << length;
+        }
       if (step % 4 != 3) continue;
       // starts() at allowed origins s < n + 64 (every one up to 130 columns, every 7th above)
       // and every length, bit by bit.

@@ -373,29 +373,37 @@ Attempt place_all(const std::vector<Chart>& charts, const Footprints& prints, co
           y = skip - 1;  // the loop's ++y lands on it
           continue;
         }
-        // The row's candidate columns [margin, n - margin - bw] 64 at a time, as a mask that
-        // each run narrows to the starts where its row is free; the lowest bit left is the
-        // leftmost fit.
+        // The row's candidate columns x in [margin, n - margin - bw], 64 at a time from x0: a
+        // mask that each run narrows to the starts where its row is free; the lowest bit left
+        // is the leftmost fit.
         const int x_last = n - margin - bw;
-        for (int x0 = margin / 64 * 64; x0 <= x_last; x0 += 64) {
-          uint64_t fit_mask = ~uint64_t{0} << (std::max(margin - x0, 0));
-          if (x_last - x0 < 63) fit_mask &= ~uint64_t{0} >> (63 - (x_last - x0));
+        for (int x0 = margin; x0 <= x_last;) {
+          uint64_t fit_mask = x_last - x0 < 63 ? ~uint64_t{0} >> (63 - (x_last - x0)) : ~uint64_t{0};
+          size_t ruled_out = 0;  // the run that emptied the mask
           for (size_t i = 0; i < runs.size() && fit_mask != 0; ++i) {
             const auto run = runs[i];
             const int row = y + run[0];
             for (int at = run[1]; at <= run[2] && fit_mask != 0; at += 64)
               fit_mask &= free_rows.starts(row, x0 + at, std::min(64, run[2] - at + 1));
-            if (fit_mask == 0) std::swap(runs[i], runs[i / 2]);
+            if (fit_mask == 0) ruled_out = i;
           }
-          if (fit_mask != 0) {
-            const int x = x0 + __builtin_ctzll(fit_mask);
-            fit[static_cast<size_t>(r)] = {r, x, y};
-            fits[static_cast<size_t>(r)] = true;
-            int seen = lowest_key.load(std::memory_order_relaxed);
-            while (y + off < seen && !lowest_key.compare_exchange_weak(seen, y + off, std::memory_order_relaxed)) {
-            }
-            return;
+          if (fit_mask == 0) {
+            // No start in [x0, x0 + 63] fits: the next 64 begin where the run that ruled these
+            // out is next free in its row (nowhere: no fit in this row); the holes too short
+            // for it are passed without testing their starts.
+            const auto run = runs[ruled_out];
+            std::swap(runs[ruled_out], runs[ruled_out / 2]);
+            const int free_at = free_rows.next_fit(y + run[0], x0 + 64 + run[1], run[2] - run[1] + 1);
+            if (free_at < 0) break;
+            x0 = free_at - run[1];
+            continue;
           }
+          fit[static_cast<size_t>(r)] = {r, x0 + __builtin_ctzll(fit_mask), y};
+          fits[static_cast<size_t>(r)] = true;
+          int seen = lowest_key.load(std::memory_order_relaxed);
+          while (y + off < seen && !lowest_key.compare_exchange_weak(seen, y + off, std::memory_order_relaxed)) {
+          }
+          return;
         }
       }
     };
@@ -466,20 +474,28 @@ Attempt place_all(const std::vector<Chart>& charts, const Footprints& prints, co
       std::vector<uint8_t> coarse(static_cast<size_t>(cw) * static_cast<size_t>(cy1 - cy0 + 1), 0);
       for (const auto& t : best_texels)
         coarse[static_cast<size_t>((t[1] >> k) - cy0) * static_cast<size_t>(cw) + static_cast<size_t>((t[0] >> k) - cx0)] = 1;
-      // Rows of the dilated coarse set, as column ranges per coarse row (a box dilation).
+      // Rows of the dilated coarse set, as column ranges per coarse row (a box dilation),
+      // over the chart's dilated box only: its columns [dx0, dx1].
+      const int dx0 = std::max(0, cx0 - reach), dx1 = std::min(cn - 1, cx1 + reach);
+      std::vector<uint8_t> row(static_cast<size_t>(dx1 - dx0 + 1));
       for (int cy = std::max(0, cy0 - reach); cy <= std::min(cn - 1, cy1 + reach); ++cy) {
-        std::vector<uint8_t> row(static_cast<size_t>(cn), 0);
+        std::fill(row.begin(), row.end(), uint8_t{0});
         bool any = false;
         for (int sy = std::max(cy0, cy - reach); sy <= std::min(cy1, cy + reach); ++sy)
           for (int sx = cx0; sx <= cx1; ++sx)
             if (coarse[static_cast<size_t>(sy - cy0) * static_cast<size_t>(cw) + static_cast<size_t>(sx - cx0)]) {
-              for (int x = std::max(0, sx - reach); x <= std::min(cn - 1, sx + reach); ++x) row[static_cast<size_t>(x)] = 1;
+              for (int x = std::max(dx0, sx - reach); x <= std::min(dx1, sx + reach); ++x) row[static_cast<size_t>(x - dx0)] = 1;
               any = true;
             }
         if (!any) continue;
         for (int y = cy * b; y < (cy + 1) * b; ++y) {
-          for (int cx = 0; cx < cn; ++cx)
-            if (row[static_cast<size_t>(cx)]) block_range(y, cx * b, cx * b + b - 1);
+          for (int cx = dx0; cx <= dx1; ++cx) {
+            if (!row[static_cast<size_t>(cx - dx0)]) continue;
+            int end = cx;  // a stretch of marked coarse columns, blocked in one range
+            while (end < dx1 && row[static_cast<size_t>(end + 1 - dx0)]) ++end;
+            block_range(y, cx * b, end * b + b - 1);
+            cx = end;
+          }
           row0 = std::min(row0, y);
           row1 = std::max(row1, y);
         }
