@@ -3,7 +3,9 @@
 #include "image_io_backend.hpp"
 
 #include "meso/core/error.hpp"
+#include "meso/formats/atomic_file.hpp"
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
 #include <fcntl.h>
@@ -14,6 +16,7 @@
 #include <cstdio>
 #include <cstdint>
 #include <filesystem>
+#include <fstream>
 #include <limits>
 #include <memory>
 #include <sstream>
@@ -192,16 +195,8 @@ OIIO::TypeDesc type_of(PixelFormat format) {
   return OIIO::TypeDesc::FLOAT;
 }
 
-// The file's own name for messages: an OutputSet writes to ".meso-tmp-<pid>-<n>-<name>"
-// beside it (atomic_file.hpp), which the user never sees.
-std::string shown_name(const std::string& name) {
-  const std::filesystem::path p(name);
-  const std::string file = p.filename().string();
-  if (file.rfind(".meso-tmp-", 0) != 0) return name;
-  size_t at = std::string(".meso-tmp-").size();
-  for (int dash = 0; dash < 2 && at != std::string::npos; ++dash) at = file.find('-', at) + 1;  // past <pid>- and <n>-
-  return at == std::string::npos || at == 0 ? name : (p.parent_path() / file.substr(at)).string();
-}
+// The file's own name for messages (an OutputSet's temporary is never seen).
+std::string shown_name(const std::string& name) { return shown_output_name(name); }
 
 // No map meso writes holds NaN or Inf ("never write NaN into a map"), nor, in half, a value
 // that half would turn into Inf: either is a bug upstream, refused before a byte is written.
@@ -261,15 +256,40 @@ bool write_pixels(OIIO::ImageOutput& out, const Image& image, PixelFormat format
   return out.write_image(OIIO::TypeDesc::FLOAT, image.pixels.data());
 }
 
+// Some of OIIO's writers do not see a failed write: its PNG writer closes a file truncated by
+// a full disk as if complete, and OpenEXR 3.1's tiled writer never returns (its tile tasks'
+// semaphore is never posted). Those encode into memory, and the bytes reach the disk in one
+// write whose failure is checked: a file is complete or reported.
+struct MemoryOutput {
+  std::vector<unsigned char> bytes;
+  OIIO::Filesystem::IOVecOutput proxy{bytes};
+  // The writer for `name`'s extension, into `bytes`.
+  std::unique_ptr<OIIO::ImageOutput> create(const std::string& name) {
+    auto out = OIIO::ImageOutput::create(name, &proxy);
+    if (out && !out->supports("ioproxy")) throw InternalError(shown_name(name) + ": this image writer cannot write to memory");
+    return out;
+  }
+  // After the writer is closed and destroyed (OpenEXR writes a tiled file's offset table
+  // when its file object is destroyed).
+  void save(const fs::path& path) const {
+    std::ofstream file(path, std::ios::binary);
+    file.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+    file.close();
+    if (!file) throw InternalError(shown_name(path.string()) + ": write failed (" + std::to_string(bytes.size()) + " bytes; is the disk full?)");
+  }
+};
+
 void write_image(const Image& image, const fs::path& path, PixelFormat format) {
   const std::string name = path.string();
   check_writable(image, name, format);
-  auto out = OIIO::ImageOutput::create(name);
-  if (!out) throw InternalError(shown_name(name) + ": no image writer for this extension");
   std::string extension = path.extension().string();
   std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  MemoryOutput memory;
+  const bool png = extension == ".png";
+  auto out = png ? memory.create(name) : OIIO::ImageOutput::create(name);
+  if (!out) throw InternalError(shown_name(name) + ": no image writer for this extension");
   const bool tiff = extension == ".tif" || extension == ".tiff";
-  OIIO::ImageSpec spec = spec_of(image, format, image.metadata, extension == ".png" || tiff);
+  OIIO::ImageSpec spec = spec_of(image, format, image.metadata, png || tiff);
   if (tiff) {
     // TIFF has no free-form attributes (OIIO drops them): the metadata goes into the
     // ImageDescription tag as "meso:key=value" lines, which read_level() parses back.
@@ -283,6 +303,10 @@ void write_image(const Image& image, const fs::path& path, PixelFormat format) {
   }
   if (!out->open(name, spec)) throw InternalError(shown_name(name) + ": cannot open for writing: " + out->geterror());
   if (!write_pixels(*out, image, format) || !out->close()) throw InternalError(shown_name(name) + ": cannot write image: " + out->geterror());
+  if (png) {
+    out.reset();
+    memory.save(path);
+  }
 }
 
 void write_image_levels(const std::vector<Image>& levels, const fs::path& path, PixelFormat format) {
@@ -295,7 +319,8 @@ void write_image_levels(const std::vector<Image>& levels, const fs::path& path, 
       throw InternalError(shown_name(name) + ": level sizes do not halve (rounding down) from one level to the next");
   }
   if (format != PixelFormat::float32 && format != PixelFormat::half) throw InternalError(shown_name(name) + ": MIP levels are written as EXR only");
-  auto out = OIIO::ImageOutput::create(name);
+  MemoryOutput memory;  // a tiled EXR (see MemoryOutput)
+  auto out = memory.create(name);
   if (!out || !out->supports("mipmap")) throw InternalError(shown_name(name) + ": this format cannot hold MIP levels (use .exr)");
   for (size_t k = 0; k < levels.size(); ++k) {
     OIIO::ImageSpec spec = spec_of(levels[k], format, k == 0 ? levels[0].metadata : ImageMetadata{});
@@ -308,6 +333,8 @@ void write_image_levels(const std::vector<Image>& levels, const fs::path& path, 
     if (!write_pixels(*out, levels[k], format)) throw InternalError(shown_name(name) + ": cannot write level " + std::to_string(k) + ": " + out->geterror());
   }
   if (!out->close()) throw InternalError(shown_name(name) + ": cannot write image: " + out->geterror());
+  out.reset();
+  memory.save(path);
 }
 
 std::vector<Image> read_image_levels(const fs::path& path) {

@@ -202,6 +202,33 @@ TEST(ImageIo, TiffKeepsMetadataAsText) {
   EXPECT_EQ(test::read_text(dir / "h.tif"), test::read_text(dir / "g.tif"));
 }
 
+// A full disk: every image writer reports the failed write (exit 4) and returns. /dev/full
+// fails every write with ENOSPC; a link to it gives the extension that picks the format.
+// (OpenEXR's tiled writer, MIP levels, had waited forever on its tile tasks.)
+TEST(ImageIo, AFullDiskFailsEveryWriter) {
+  if (!std::filesystem::exists("/dev/full")) GTEST_SKIP() << "no /dev/full";
+  test::TempDir dir;
+  const Image img = ramp(64, 64, 2);
+  auto full = [&](const std::string& name) {
+    const auto path = dir / name;
+    std::filesystem::create_symlink("/dev/full", path);
+    return path;
+  };
+  auto expect_failure = [](const std::string& what, auto&& write) {
+    try {
+      write();
+      ADD_FAILURE() << what << ": the write to a full disk was reported as done";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), ExitCode::internal) << what << ": " << e.what();
+    }
+  };
+  expect_failure("levels", [&] { write_image_levels({img, ramp(32, 32, 2), ramp(16, 16, 2)}, full("l.exr"), PixelFormat::float32); });
+  expect_failure("parts", [&] { write_image_parts({img, ramp(8, 1, 1)}, full("p.exr"), PixelFormat::half); });
+  expect_failure("exr", [&] { write_image(img, full("i.exr"), PixelFormat::float32); });
+  expect_failure("png", [&] { write_image(img, full("i.png"), PixelFormat::uint16); });
+  expect_failure("tif", [&] { write_image(img, full("i.tif"), PixelFormat::uint8); });
+}
+
 TEST(ImageIo, WritesAreDeterministic) {
   test::TempDir dir;
   Image img = ramp(64, 32, 1);

@@ -1,4 +1,5 @@
 #include "meso/formats/mesh_io.hpp"
+#include "meso/formats/atomic_file.hpp"
 
 #include "meso/core/error.hpp"
 #include "meso/core/mesh_arrays.hpp"
@@ -169,7 +170,7 @@ size_t check_obj_lines(const std::string& text, const std::string& name) {
     while (q < stop && blank(*q)) ++q;
     const bool vt = stop - q > 2 && q[0] == 'v' && q[1] == 't' && blank(q[2]);
     const bool v = stop - q > 1 && q[0] == 'v' && blank(q[1]);
-    const bool f = stop - q > 1 && q[0] == 'f' && blank(q[1]);
+    const bool f = stop - q >= 1 && q[0] == 'f' && (stop - q == 1 || blank(q[1]));
     if (!vt && !v && !f) continue;
     q += vt ? 2 : 1;
     const auto where = [&] { return "line " + std::to_string(statement_line); };
@@ -212,6 +213,9 @@ size_t check_obj_lines(const std::string& text, const std::string& name) {
       ++textured;
     }
     if (v && values < 3) throw InputError(name, where() + ": a vertex needs three coordinates (x y z)");
+    // (A file cut inside its last face statement is caught here when the cut leaves fewer than
+    // three corners: assimp reads such a face as a point or line and drops it.)
+    if (f && corners < 3) throw InputError(name, where() + ": a face needs at least three vertices");
     if (vt) ++texcoords;
     if (f && textured == 0 && corners >= 3) untextured += corners - 2;  // assimp fans a polygon into n - 2 triangles
   }
@@ -606,9 +610,14 @@ namespace {
 
 void write_with_openmesh(const Mesh& mesh, const fs::path& path, OpenMesh::IO::Options opt) {
   const SilenceOpenMesh silence;
-  // (Binary PLY only: the precision argument matters to OpenMesh's text writers, not used.)
-  if (!OpenMesh::IO::write_mesh(mesh, path.string(), opt, 9))
-    throw InternalError(path.string() + ": cannot write mesh");
+  // Through a stream of our own: OpenMesh's writers do not check the stream after writing,
+  // so a full disk left a truncated file reported as written. (Binary PLY only: the
+  // precision argument matters to OpenMesh's text writers, not used.)
+  std::ofstream out(path, std::ios::binary);
+  if (!out) throw InternalError(shown_output_name(path.string()) + ": cannot open for writing");
+  if (!OpenMesh::IO::write_mesh(mesh, out, path.extension().string(), opt, 9)) throw InternalError(shown_output_name(path.string()) + ": cannot write mesh");
+  out.close();
+  if (!out) throw InternalError(shown_output_name(path.string()) + ": write failed");
 }
 
 void write_ply(const Mesh& mesh, const fs::path& path) {
@@ -630,7 +639,7 @@ void write_ply(const Mesh& mesh, const fs::path& path) {
     for (int k = 0; k < 3; ++k) vs.push_back(VertexHandle(static_cast<int>(split.triangles[3 * f + static_cast<size_t>(k)])));
     if (!out.add_face(vs).is_valid()) ++bad;
   }
-  if (bad) throw InternalError(path.string() + ": " + std::to_string(bad) + " faces cannot be represented in PLY output");
+  if (bad) throw InternalError(shown_output_name(path.string()) + ": " + std::to_string(bad) + " faces cannot be represented in PLY output");
   OpenMesh::IO::Options opt = OpenMesh::IO::Options::Binary;
   if (mesh.has_vertex_normals()) opt += OpenMesh::IO::Options::VertexNormal;
   if (uv) opt += OpenMesh::IO::Options::VertexTexCoord;
@@ -645,7 +654,7 @@ void write_ply(const Mesh& mesh, const fs::path& path) {
 // corner (the to-vertex of its halfedge).
 void write_obj(const Mesh& mesh, const fs::path& path) {
   std::ofstream out(path, std::ios::binary);
-  if (!out) throw InternalError(path.string() + ": cannot open for writing");
+  if (!out) throw InternalError(shown_output_name(path.string()) + ": cannot open for writing");
   const bool uv = has_uvs(mesh), normals = mesh.has_vertex_normals();
   std::string text;
   auto flush = [&] {
@@ -718,7 +727,7 @@ void write_obj(const Mesh& mesh, const fs::path& path) {
   }
   flush();
   out.close();  // flush now: a full disk shows here, not after the file is committed
-  if (!out) throw InternalError(path.string() + ": write failed");
+  if (!out) throw InternalError(shown_output_name(path.string()) + ": write failed");
 }
 
 void base64(const std::vector<uint8_t>& in, std::string& out) {
@@ -821,7 +830,7 @@ void write_gltf(const Mesh& mesh, const fs::path& path, bool binary) {
   doc["bufferViews"] = views;
   nlohmann::json buffer = {{"byteLength", buf.size()}};
   std::ofstream out(path, std::ios::binary);
-  if (!out) throw InternalError(path.string() + ": cannot open for writing");
+  if (!out) throw InternalError(shown_output_name(path.string()) + ": cannot open for writing");
   if (!binary) {
     std::string uri = "data:application/octet-stream;base64,";
     base64(buf, uri);
@@ -845,7 +854,7 @@ void write_gltf(const Mesh& mesh, const fs::path& path, bool binary) {
     out.write(reinterpret_cast<const char*>(buf.data()), static_cast<std::streamsize>(buf.size()));
   }
   out.close();  // flush now: a full disk shows here, not after the file is committed
-  if (!out) throw InternalError(path.string() + ": write failed");
+  if (!out) throw InternalError(shown_output_name(path.string()) + ": write failed");
 }
 
 }  // namespace

@@ -61,6 +61,25 @@ INSTANTIATE_TEST_SUITE_P(Formats, MeshRoundTrip, ::testing::Values(".obj", ".ply
 // printed nine decimals, which left a mesh at 1e-6 one or two significant digits and one at
 // 1e-30 only zeros). Positions with full mantissas at scales from 1e-12 to 1e7, UVs too.
 // (At 1e-30 the text is exact but assimp's fast reader rounds some values by an ulp.)
+// A full disk: every writer reports the failed write (exit 4) rather than a file it did not
+// complete. /dev/full fails every write with ENOSPC; a link to it gives the extension that
+// picks the format. (OpenMesh's PLY writer had ignored the failure: a truncated file, exit 0.)
+TEST(MeshIo, AFullDiskFailsEveryWriter) {
+  if (!std::filesystem::exists("/dev/full")) GTEST_SKIP() << "no /dev/full";
+  test::TempDir dir;
+  const Mesh cube = test::make_seamed_cube();
+  for (const std::string ext : {".ply", ".obj", ".gltf", ".glb"}) {
+    const auto path = dir / ("full" + ext);
+    std::filesystem::create_symlink("/dev/full", path);
+    try {
+      write_mesh(cube, path);
+      ADD_FAILURE() << ext << ": the write to a full disk was reported as done";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), ExitCode::internal) << ext << ": " << e.what();
+    }
+  }
+}
+
 TEST(MeshIo, ObjKeepsEveryFloatAtAnyScale) {
   test::TempDir dir;
   for (const double scale : {1e-12, 1.2345678e-6, 0.37, 1.0, 3.3e3, 1.7e7}) {
@@ -254,6 +273,10 @@ TEST(MeshIo, ObjTextureCoordinatesAreCheckedNotRepaired) {
        "line 9: face corner '4/9/1' names texture coordinate 9, but the file has 3"},
       {"zero.obj", quad + "vt 0 0\nvt 1 0\nvt 1 1\nf 1/0 2/2 3/3\n", "line 8: face corner '1/0'"},
       {"back.obj", quad + "vt 0 0\nf 1/-1 2/-2 3/-1\n", "line 6: face corner '2/-2' names texture coordinate -2, but the file has 1 before it"},
+      // A file cut inside its last face: assimp had read it without that face, exit 0.
+      {"cutf.obj", quad + "f 1 2 3\nf \n", "line 6: a face needs at least three vertices"},
+      {"cutf2.obj", quad + "f 1 2 3\nf 1 3", "line 6: a face needs at least three vertices"},
+      {"baref.obj", quad + "f 1 2 3\nf", "line 6: a face needs at least three vertices"},
   };
   for (const auto& c : bad) {
     test::write_text(dir / c.file, c.text);

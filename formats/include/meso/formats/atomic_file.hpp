@@ -9,6 +9,17 @@
 
 namespace meso {
 
+// The name a user gave for a path OutputSet::add() returned (".meso-tmp-<pid>-<n>-<name>"
+// beside it), for messages: the temporary is never seen. Other paths come back unchanged.
+inline std::string shown_output_name(const std::string& name) {
+  const std::filesystem::path p(name);
+  const std::string file = p.filename().string(), prefix = ".meso-tmp-";
+  if (file.rfind(prefix, 0) != 0) return name;
+  size_t at = prefix.size();
+  for (int dash = 0; dash < 2 && at != std::string::npos; ++dash) at = file.find('-', at) + 1;  // past <pid>- and <n>-
+  return at == std::string::npos || at == 0 ? name : (p.parent_path() / file.substr(at)).string();
+}
+
 class OutputSet {
  public:
   OutputSet() = default;
