@@ -2,6 +2,7 @@
 // 2 bad usage, 3 bad input, 4 internal error (meso/core/error.hpp).
 #include "cli.hpp"
 
+#include "meso/formats/atomic_file.hpp"
 #include "meso/formats/image_io.hpp"
 
 #include "meso/core/error.hpp"
@@ -167,6 +168,8 @@ std::string first_line(const std::string& text) { return text.substr(0, text.fin
 
 int main(int argc, char** argv) {
   using namespace meso;
+  // Ctrl-C or a build system's kill during a run leaves no temporary output behind.
+  remove_outputs_on_signals();
   cli::Globals globals;
   cli::Context ctx{globals, {}};
 

@@ -5,7 +5,9 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cerrno>
+#include <csignal>
 #include <cstring>
 
 #include <fstream>
@@ -15,6 +17,56 @@
 namespace meso {
 
 namespace fs = std::filesystem;
+
+namespace {
+
+// Every listed path of the live OutputSets, for the signal handler: fixed tables of atomic
+// pointers, files and folders apart (a set lists its temporaries and new folders while it
+// may still remove them, and clears their slots before freeing the strings). More outputs at
+// once than slots go unlisted: an interrupt may then leave them.
+constexpr int kSlots = 256;
+std::atomic<const char*> g_files[kSlots];
+std::atomic<const char*> g_folders[kSlots];
+
+void remove_listed_and_reraise(int sig) {
+  const int saved = errno;
+  for (auto& f : g_files)
+    if (const char* p = f.load()) ::unlink(p);
+  // Folders after their files; nested new folders empty from the inside out, so passes
+  // repeat while one goes (a removed one fails the next time: the loop ends).
+  for (bool removed = true; removed;) {
+    removed = false;
+    for (auto& f : g_folders)
+      if (const char* p = f.load(); p && ::rmdir(p) == 0) removed = true;
+  }
+  errno = saved;
+  ::signal(sig, SIG_DFL);
+  ::raise(sig);
+}
+
+}  // namespace
+
+OutputSet::Listed::Listed(const fs::path& path, bool folder) : path_(path.string()), folder_(folder) {
+  auto& table = folder ? g_folders : g_files;
+  for (int i = 0; i < kSlots; ++i) {
+    const char* expected = nullptr;
+    if (table[i].compare_exchange_strong(expected, path_.c_str())) {
+      slot_ = i;
+      return;
+    }
+  }
+}
+
+OutputSet::Listed::~Listed() {
+  if (slot_ >= 0) (folder_ ? g_folders : g_files)[slot_].store(nullptr);
+}
+
+void remove_outputs_on_signals() {
+  struct sigaction action {};
+  action.sa_handler = remove_listed_and_reraise;
+  sigemptyset(&action.sa_mask);
+  for (int sig : {SIGINT, SIGTERM, SIGHUP}) ::sigaction(sig, &action, nullptr);
+}
 
 OutputSet::~OutputSet() {
   if (committed_) return;
@@ -50,6 +102,7 @@ fs::path OutputSet::add(const fs::path& final_path) {
   if (ec) throw UsageError(parent.string() + ": cannot create folder: " + ec.message());
   if (!fs::is_directory(parent)) throw UsageError(parent.string() + ": is not a folder");
   created_folders_.insert(created_folders_.end(), missing.begin(), missing.end());
+  for (const fs::path& p : missing) listed_folders_.push_back(std::make_unique<Listed>(p, true));
   const fs::path temp =
       parent / (".meso-tmp-" + std::to_string(::getpid()) + "-" + std::to_string(entries_.size()) + "-" +
                 final_path.filename().string());
@@ -59,7 +112,7 @@ fs::path OutputSet::add(const fs::path& final_path) {
   if (fd < 0) throw UsageError(final_path.string() + ": cannot write there: " + std::strerror(errno));
   ::close(fd);
   fs::remove(temp, ec);
-  entries_.push_back({temp, final_path});
+  entries_.push_back({temp, final_path, std::make_unique<Listed>(temp, false)});
   return temp;
 }
 
@@ -81,6 +134,9 @@ void OutputSet::commit() {
     if (ec) throw InternalError(e.final.string() + ": cannot rename into place: " + ec.message());
   }
   committed_ = true;
+  // Renamed: nothing is left for an interrupt to remove.
+  for (auto& e : entries_) e.listed.reset();
+  listed_folders_.clear();
 }
 
 }  // namespace meso

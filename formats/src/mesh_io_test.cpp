@@ -6,6 +6,10 @@
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <csignal>
 
 #include <cstdio>
 
@@ -451,6 +455,37 @@ TEST(OutputSet, AFolderIsNotAnOutputFile) {
   // Nor is a file a folder to write into.
   test::write_text(dir / "file", "x");
   EXPECT_THROW(out.add(dir / "file" / "maps" / "displacement.exr"), UsageError);
+}
+
+// An interrupt (SIGINT, SIGTERM, SIGHUP) during a run removes its temporaries and the
+// folders it created, then ends the process by that signal. In a child process: it lists a
+// written temporary in new nested folders and one in the existing folder, then signals
+// itself; a committed output of an earlier set stays.
+TEST(OutputSet, AnInterruptRemovesTheTemporaries) {
+  test::TempDir dir;
+  for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
+    const pid_t child = ::fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) {
+      remove_outputs_on_signals();
+      {
+        OutputSet kept;
+        kept.write_text(dir / "kept.json", "{}");
+        kept.commit();
+      }
+      OutputSet out;
+      out.write_text(dir / "new" / "deeper" / "report.json", "{}");
+      out.write_text(dir / "here.json", "{}");
+      ::raise(sig);
+      ::_exit(99);  // not reached: the default action ends the process
+    }
+    int status = 0;
+    ASSERT_EQ(::waitpid(child, &status, 0), child);
+    EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == sig) << "signal " << sig << ", status " << status;
+    std::vector<std::string> left;
+    for (const auto& e : std::filesystem::directory_iterator(dir.path())) left.push_back(e.path().filename().string());
+    EXPECT_EQ(left, std::vector<std::string>{"kept.json"}) << "signal " << sig;
+  }
 }
 
 TEST(OutputSet, LeavesNothingWithoutCommit) {

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -44,12 +45,36 @@ class OutputSet {
   void commit();
 
  private:
+  // A temporary file or a created folder, listed for remove_outputs_on_signals() while the
+  // set may still remove it (its own copy of the path: the table holds a pointer to it).
+  class Listed {
+   public:
+    explicit Listed(const std::filesystem::path& path, bool folder);
+    ~Listed();
+    Listed(const Listed&) = delete;
+    Listed& operator=(const Listed&) = delete;
+
+   private:
+    std::string path_;
+    bool folder_;
+    int slot_ = -1;  // -1: the table was full, not listed
+  };
   struct Entry {
     std::filesystem::path temp, final;
+    std::unique_ptr<Listed> listed;
   };
   std::vector<Entry> entries_;
   std::vector<std::filesystem::path> created_folders_;  // deepest last
+  std::vector<std::unique_ptr<Listed>> listed_folders_;
   bool committed_ = false;
 };
+
+// Installs handlers for SIGINT, SIGTERM and SIGHUP that remove the temporaries of every
+// OutputSet not yet committed, and the folders they created if empty, then end the process
+// by the same signal (its default action): an interrupted run leaves no partial output
+// behind, as a failed one. For programs (apps/meso's main), once, before any work; a
+// library never installs it. The handler only reads a fixed table and calls unlink/rmdir
+// (async-signal-safe).
+void remove_outputs_on_signals();
 
 }  // namespace meso
