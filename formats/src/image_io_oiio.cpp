@@ -16,9 +16,9 @@
 #include <cstdio>
 #include <cstdint>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <sstream>
 
 namespace meso {
@@ -258,25 +258,37 @@ bool write_pixels(OIIO::ImageOutput& out, const Image& image, PixelFormat format
 
 // Some of OIIO's writers do not see a failed write: its PNG writer closes a file truncated by
 // a full disk as if complete, and OpenEXR 3.1's tiled writer never returns (its tile tasks'
-// semaphore is never posted). Those encode into memory, and the bytes reach the disk in one
-// write whose failure is checked: a file is complete or reported.
-struct MemoryOutput {
-  std::vector<unsigned char> bytes;
-  OIIO::Filesystem::IOVecOutput proxy{bytes};
-  // The writer for `name`'s extension, into `bytes`.
-  std::unique_ptr<OIIO::ImageOutput> create(const std::string& name) {
-    auto out = OIIO::ImageOutput::create(name, &proxy);
-    if (out && !out->supports("ioproxy")) throw InternalError(shown_name(name) + ": this image writer cannot write to memory");
+// semaphore is never posted after a failed write). Those write through this file, which
+// remembers a failed write and tells the writer it succeeded, so the writer runs to its end
+// and finish() reports whether every byte reached the file.
+class CheckedFile final : public OIIO::Filesystem::IOFile {
+ public:
+  explicit CheckedFile(const std::string& name) : IOFile(name, Write), name_(name) {
+    if (!opened()) throw InternalError(shown_name(name) + ": cannot open for writing");
+  }
+  size_t write(const void* buf, size_t size) override { return note(IOFile::write(buf, size), size); }
+  size_t pwrite(const void* buf, size_t size, int64_t offset) override { return note(IOFile::pwrite(buf, size, offset), size); }
+  // The writer for the file's extension, writing here.
+  std::unique_ptr<OIIO::ImageOutput> create() {
+    auto out = OIIO::ImageOutput::create(name_, this);
+    if (out && !out->supports("ioproxy")) throw InternalError(shown_name(name_) + ": this image writer cannot write through meso's checked file");
     return out;
   }
   // After the writer is closed and destroyed (OpenEXR writes a tiled file's offset table
   // when its file object is destroyed).
-  void save(const fs::path& path) const {
-    std::ofstream file(path, std::ios::binary);
-    file.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
-    file.close();
-    if (!file) throw InternalError(shown_name(path.string()) + ": write failed (" + std::to_string(bytes.size()) + " bytes; is the disk full?)");
+  void finish() {
+    if (std::fflush(handle()) != 0) failed_ = true;
+    close();
+    if (failed_) throw InternalError(shown_name(name_) + ": write failed (is the disk full?)");
   }
+
+ private:
+  size_t note(size_t done, size_t size) {
+    if (done != size) failed_ = true;
+    return size;
+  }
+  std::string name_;
+  bool failed_ = false;
 };
 
 void write_image(const Image& image, const fs::path& path, PixelFormat format) {
@@ -284,9 +296,10 @@ void write_image(const Image& image, const fs::path& path, PixelFormat format) {
   check_writable(image, name, format);
   std::string extension = path.extension().string();
   std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  MemoryOutput memory;
   const bool png = extension == ".png";
-  auto out = png ? memory.create(name) : OIIO::ImageOutput::create(name);
+  std::optional<CheckedFile> checked;
+  if (png) checked.emplace(name);
+  auto out = png ? checked->create() : OIIO::ImageOutput::create(name);
   if (!out) throw InternalError(shown_name(name) + ": no image writer for this extension");
   const bool tiff = extension == ".tif" || extension == ".tiff";
   OIIO::ImageSpec spec = spec_of(image, format, image.metadata, png || tiff);
@@ -305,7 +318,7 @@ void write_image(const Image& image, const fs::path& path, PixelFormat format) {
   if (!write_pixels(*out, image, format) || !out->close()) throw InternalError(shown_name(name) + ": cannot write image: " + out->geterror());
   if (png) {
     out.reset();
-    memory.save(path);
+    checked->finish();
   }
 }
 
@@ -319,8 +332,8 @@ void write_image_levels(const std::vector<Image>& levels, const fs::path& path, 
       throw InternalError(shown_name(name) + ": level sizes do not halve (rounding down) from one level to the next");
   }
   if (format != PixelFormat::float32 && format != PixelFormat::half) throw InternalError(shown_name(name) + ": MIP levels are written as EXR only");
-  MemoryOutput memory;  // a tiled EXR (see MemoryOutput)
-  auto out = memory.create(name);
+  CheckedFile checked(name);  // a tiled EXR (see CheckedFile)
+  auto out = checked.create();
   if (!out || !out->supports("mipmap")) throw InternalError(shown_name(name) + ": this format cannot hold MIP levels (use .exr)");
   for (size_t k = 0; k < levels.size(); ++k) {
     OIIO::ImageSpec spec = spec_of(levels[k], format, k == 0 ? levels[0].metadata : ImageMetadata{});
@@ -334,7 +347,7 @@ void write_image_levels(const std::vector<Image>& levels, const fs::path& path, 
   }
   if (!out->close()) throw InternalError(shown_name(name) + ": cannot write image: " + out->geterror());
   out.reset();
-  memory.save(path);
+  checked.finish();
 }
 
 std::vector<Image> read_image_levels(const fs::path& path) {
