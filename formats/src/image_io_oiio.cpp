@@ -309,7 +309,10 @@ void write_image(const Image& image, const fs::path& path, PixelFormat format) {
     std::string description;
     for (const auto& p : spec.extra_attribs) {
       const std::string key = p.name().string();
-      if (key.rfind(kPrefix, 0) == 0) description += key + "=" + p.get_string() + "\n";
+      if (key.rfind(kPrefix, 0) != 0) continue;
+      std::string value = p.get_string();
+      std::replace(value.begin(), value.end(), '\n', ' ');  // one line per key
+      description += key + "=" + value + "\n";
     }
     for (const auto& [k, v] : image.metadata) spec.erase_attribute(std::string(kPrefix) + k);
     if (!description.empty()) spec.attribute("ImageDescription", description);
