@@ -164,6 +164,16 @@ struct Footprint {
 // span, not per texel of the box.
 Footprint footprint(const Chart& c, double s, int r, double grow) {
   Footprint out;
+  if (c.area == 0) {
+    // No UV area (every face degenerate: a point or a line in UV): no texel to keep, so one
+    // texel whatever its extent, and its UVs collapse to that texel's centre. Its extent
+    // scaled as the others' had bounded the common scale: a degenerate line 1 long in UV beside
+    // a chart 0.2 across had left that chart 1/5 of the atlas it could have.
+    out.bw = out.bh = 1;
+    out.runs.push_back({0, 0, 0});
+    out.texels = 1;
+    return out;
+  }
   s *= c.factor;
   const Frame& f = c.frames[static_cast<size_t>(r >> 2)];
   const double w = (r & 1) ? f.h : f.w, h = (r & 1) ? f.w : f.h;
@@ -692,7 +702,8 @@ UvPackReport pack_uv_charts(Mesh& mesh, const UvPackOptions& o) {
   report.scale = lo;
   report.texel_coverage = static_cast<double>(best.touched) / (n * n);
   report.utilization = total_area * lo * lo / (n * n);
-  // Move the UVs: q' = (turn(q) * s + offset) / size, v = 1 - q'y.
+  // Move the UVs: q' = (turn(q) * s + offset) / size, v = 1 - q'y; a chart without UV area to
+  // the centre of its one texel (footprint()).
   for (size_t ci = 0; ci < count; ++ci) {
     const Chart& c = charts[ci];
     const Placement& p = best.where[ci];
@@ -700,7 +711,8 @@ UvPackReport pack_uv_charts(Mesh& mesh, const UvPackOptions& o) {
       for (auto h : face_halfedges(mesh, FaceHandle(f))) {
         const Vec2f uv = mesh.texcoord2D(h);
         const auto q = turn(c, uv[0], -static_cast<double>(uv[1]), p.orientation);
-        const double x = (q[0] * lo * c.factor + kInset + p.x) / n, y = (q[1] * lo * c.factor + kInset + p.y) / n;
+        const double scale = c.area == 0 ? 0 : lo * c.factor, inset = c.area == 0 ? 0.5 : kInset;
+        const double x = (q[0] * scale + inset + p.x) / n, y = (q[1] * scale + inset + p.y) / n;
         mesh.set_texcoord2D(h, Vec2f(static_cast<float>(x), static_cast<float>(1.0 - y)));
       }
   }

@@ -158,6 +158,30 @@ TEST(UvPack, ATinyChartNearTheOriginKeepsItsArea) {
   EXPECT_TRUE(c.outside_faces.empty());
 }
 
+// A chart without UV area (here a line 1 long: a quad of height 0) takes one texel and no
+// part of the scale: its extent had bounded the common scale, and the 0.2-wide square beside
+// it got 1/5 of the atlas it fills alone. Its UVs meet at that texel's centre.
+TEST(UvPack, AChartWithoutAreaTakesOneTexel) {
+  Mesh m = test::make_uv_quads({{0, 0, 0.2f, 0.2f}, {0, 0, 1.0f, 0.0f}});
+  UvPackOptions o;
+  o.size = 256;
+  const UvPackReport r = pack_uv_charts(m, o);
+  EXPECT_GT(r.utilization, 0.9) << "the square fills the atlas as if alone";
+  std::vector<Vec2f> line;
+  for (const int f : {2, 3})
+    for (auto h : face_halfedges(m, FaceHandle(f))) line.push_back(m.texcoord2D(h));
+  for (const Vec2f& uv : line) {
+    EXPECT_EQ(uv, line.front()) << "collapsed to one point";
+    EXPECT_GT(uv[0] * 256.0f - std::floor(uv[0] * 256.0f), 0.49f) << "at a texel centre";
+    EXPECT_LT(uv[0] * 256.0f - std::floor(uv[0] * 256.0f), 0.51f);
+  }
+  const UvCheckReport c = check_packed(m, 256, 2);
+  EXPECT_TRUE(c.overlapping_faces.empty());
+  EXPECT_EQ(c.texels_shared, 0u);
+  EXPECT_TRUE(c.padding_violations.empty());
+  EXPECT_TRUE(c.outside_faces.empty());
+}
+
 // Written UVs are rounded to float, which moves a corner by up to size 2^-25 texels: with
 // charts packed edge to edge (padding 0), an edge a hair short of a texel line crossed it and
 // shared that texel with the next chart. The footprints reserve that margin.
