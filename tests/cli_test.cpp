@@ -416,6 +416,11 @@ TEST(Cli, StreamsVdmWarnsWhenTheRankCapMissesTheError) {
   const Result met = run(base + " --max-rank 64 --max-error 1");
   ASSERT_EQ(met.code, 0) << met.err;
   EXPECT_EQ(met.err.find("were not enough"), std::string::npos) << met.err;
+  // At full rank (16 directions, 16 components) the error left is float rounding: no rank
+  // would lower it, so no warning even for --max-error 0.
+  const Result full = run(base + " --max-rank 4096 --max-error 0");
+  ASSERT_EQ(full.code, 0) << full.err;
+  EXPECT_EQ(full.err.find("were not enough"), std::string::npos) << full.err;
 }
 
 // A one-channel float EXR written with OpenEXR itself: meso's writer refuses non-finite

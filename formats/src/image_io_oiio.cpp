@@ -153,6 +153,7 @@ Image read_level(OIIO::ImageInput& in, const std::string& name, int level, int s
   if (std::string(in.format_name()) == "tiff") {
     std::istringstream lines(spec.get_string_attribute("ImageDescription"));
     for (std::string line; std::getline(lines, line);) {
+      if (!line.empty() && line.back() == '\r') line.pop_back();  // CRLF, if another tool rewrote it
       const size_t eq = line.find('=');
       if (line.rfind(kPrefix, 0) == 0 && eq != std::string::npos)
         img.metadata[line.substr(std::char_traits<char>::length(kPrefix), eq - std::char_traits<char>::length(kPrefix))] = line.substr(eq + 1);

@@ -200,6 +200,15 @@ TEST(ImageIo, TiffKeepsMetadataAsText) {
   EXPECT_EQ(std::get<std::string>(back.metadata.at("iterations")), "32");
   write_image(img, dir / "g.tif", PixelFormat::uint8);
   EXPECT_EQ(test::read_text(dir / "h.tif"), test::read_text(dir / "g.tif"));
+  // A line ending in CR, as a description another tool rewrote with CRLF line ends has them,
+  // reads the same (the last line's LF turned CR, keeping the file's length and offsets).
+  std::string crlf = test::read_text(dir / "h.tif");
+  const std::string lf = "meso:method=pom\n";
+  const size_t at = crlf.find(lf);
+  ASSERT_NE(at, std::string::npos);
+  crlf.replace(at, lf.size(), "meso:method=pom\r");  // same length: the TIFF's offsets hold
+  test::write_text(dir / "crlf.tif", crlf);
+  EXPECT_EQ(std::get<std::string>(read_image(dir / "crlf.tif").metadata.at("method")), "pom");
 }
 
 // A full disk: every image writer reports the failed write (exit 4) and returns. /dev/full
