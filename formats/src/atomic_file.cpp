@@ -74,7 +74,7 @@ OutputSet::~OutputSet() {
   for (const auto& e : entries_) fs::remove(e.temp, ec);
   // Folders this set created, deepest first, if nothing else was put in them.
   for (auto it = created_folders_.rbegin(); it != created_folders_.rend(); ++it) {
-    if (fs::is_empty(*it, ec)) fs::remove(*it, ec);
+    if (fs::is_empty((*it)->path(), ec)) fs::remove((*it)->path(), ec);
   }
 }
 
@@ -101,8 +101,7 @@ fs::path OutputSet::add(const fs::path& final_path) {
   fs::create_directories(parent, ec);
   if (ec) throw UsageError(parent.string() + ": cannot create folder: " + ec.message());
   if (!fs::is_directory(parent)) throw UsageError(parent.string() + ": is not a folder");
-  created_folders_.insert(created_folders_.end(), missing.begin(), missing.end());
-  for (const fs::path& p : missing) listed_folders_.push_back(std::make_unique<Listed>(p, true));
+  for (const fs::path& p : missing) created_folders_.push_back(std::make_unique<Listed>(p, true));
   const fs::path temp =
       parent / (".meso-tmp-" + std::to_string(::getpid()) + "-" + std::to_string(entries_.size()) + "-" +
                 final_path.filename().string());
@@ -136,7 +135,7 @@ void OutputSet::commit() {
   committed_ = true;
   // Renamed: nothing is left for an interrupt to remove.
   for (auto& e : entries_) e.listed.reset();
-  listed_folders_.clear();
+  created_folders_.clear();
 }
 
 }  // namespace meso

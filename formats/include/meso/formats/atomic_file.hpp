@@ -53,6 +53,7 @@ class OutputSet {
     ~Listed();
     Listed(const Listed&) = delete;
     Listed& operator=(const Listed&) = delete;
+    const std::string& path() const { return path_; }
 
    private:
     std::string path_;
@@ -64,8 +65,7 @@ class OutputSet {
     std::unique_ptr<Listed> listed;
   };
   std::vector<Entry> entries_;
-  std::vector<std::filesystem::path> created_folders_;  // deepest last
-  std::vector<std::unique_ptr<Listed>> listed_folders_;
+  std::vector<std::unique_ptr<Listed>> created_folders_;  // deepest last
   bool committed_ = false;
 };
 
