@@ -1,7 +1,10 @@
 // A small driver over build_cone_map on the maps of BM_ConeMap, for instruction counts
 // (valgrind --tool=callgrind) and for checking that outputs stay byte-identical:
 //   cone_time MAP SIZE RELAXED [THREADS [OUT.raw [TOLERANCE]]]
-// MAP: 0 = the example's bricks, 1 = uniform noise, 2 = smooth bumps (as bench/stages_bench.cpp).
+// MAP: 0 = the example's bricks, 1 = uniform noise, 2 = smooth bumps (as bench/stages_bench.cpp);
+// and planar cases, where cones touch the surface along whole rays (the exact plane test and
+// its tolerance concede what first-order bounds cannot settle): 3 = a ramp, 4 = a pyramid,
+// 5 = terraces (steps on a gentle slope), 6 = a cone.
 // RELAXED: 0 conservative, 1 relaxed, 2 relaxed with ConeMapOptions::exact_fans false.
 // OUT.raw receives the cone map's float pixels as they are in memory ("-": none); TOLERANCE
 // is ConeMapOptions::tolerance.
@@ -12,6 +15,7 @@
 #include <tbb/global_control.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -26,7 +30,21 @@ int main(int argc, char** argv) {
   const bool relaxed = std::atoi(argv[3]) != 0;
   const int threads = argc > 4 ? std::atoi(argv[4]) : 1;
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
-  const HeightField f = bench::bench_height_field(static_cast<bench::BenchMap>(kind), n);
+  HeightField f;
+  if (kind < 3) {
+    f = bench::bench_height_field(static_cast<bench::BenchMap>(kind), n);
+  } else {
+    Image img(n, n, 1);
+    for (int y = 0; y < n; ++y)
+      for (int x = 0; x < n; ++x) {
+        const double u = (x + 0.5) / n - 0.5, v = (y + 0.5) / n - 0.5;
+        img.at(x, y) = kind == 3 ? static_cast<float>(0.3 * x / n + 0.2 * y / n)                       // a ramp
+                       : kind == 4 ? static_cast<float>(1 - 2 * std::max(std::abs(u), std::abs(v)))  // a pyramid
+                       : kind == 5 ? static_cast<float>(std::floor(8.0 * x / n) / 8 + 0.05 * y / n)  // terraces
+                                   : static_cast<float>(1 - 2 * std::sqrt(u * u + v * v));            // a cone
+      }
+    f = make_height_field(img, Border::clamp);
+  }
   ConeMapOptions o;
   o.kind = relaxed ? ConeKind::relaxed : ConeKind::conservative;
   o.exact_fans = std::atoi(argv[3]) != 2;
