@@ -1667,7 +1667,10 @@ class BlockSearch {
   // (`apart`, d > 0; plane_excess needs r outside the footprint) may be dropped. Returns the
   // texels left. (A first test for the whole block, with its union footprint, lowest apex and
   // lowest slope, dismissed 4 % of the nodes it was tried on and cost more than it saved.)
-  Mask planes(const float* plane, const Rect& r, const Block& b, const PerTexel& top, std::vector<ConeSearch>& s, Mask keep, Mask apart) {
+  // `then(k)` is the second test of a texel k that the one-root bound leaves (true: settled):
+  // the exact plane test at nodes, the texel's grid values at leaves.
+  template <class Then>
+  Mask planes(const float* plane, const Rect& r, const Block& b, const PerTexel& top, std::vector<ConeSearch>& s, Mask keep, Mask apart, Then then) {
     const Mask tested = keep & apart;
     if (tested == 0) return keep;
     PerTexel level{};
@@ -1676,9 +1679,12 @@ class BlockSearch {
     keep &= ~settled;
     for (Mask q = tested & ~settled; q != 0; q &= q - 1) {
       const size_t k = static_cast<size_t>(low_bit(q));
-      if (under(s[k], plane, r, footprint_[k], top[k])) keep &= ~(Mask{1} << k);
+      if (then(k)) keep &= ~(Mask{1} << k);
     }
     return keep;
+  }
+  Mask planes(const float* plane, const Rect& r, const Block& b, const PerTexel& top, std::vector<ConeSearch>& s, Mask keep, Mask apart) {
+    return planes(plane, r, b, top, s, keep, apart, [&](size_t k) { return under(s[k], plane, r, footprint_[k], top[k]); });
   }
 
   // The levels of the texels of `texels` (squared: below overflow, see steeper(); an infinite
@@ -1840,19 +1846,12 @@ class BlockSearch {
           if (n.level == root_) keep = rising(leaves_.box(n.x, n.y), r, b, keep);
         } else {
           apart &= ~whole;
-          if (apart != 0) {
-            // The plane test's one-root bound, then the texel's grid values.
-            const float* plane = leaves_.plane(n.x, n.y);
-            PerTexel level{};
-            store_levels(s, apart, level, false);
-            const Mask settled = one_root_settles(plane, r, b.i0, b.j0, top, level, apart);
-            keep &= ~settled;
-            for (Mask q = apart & ~settled; q != 0; q &= q - 1) {
-              const size_t k = static_cast<size_t>(low_bit(q));
-              if (s[k].corner_texel_settles(leaf_grid, ox + n.x, oy + n.y)) keep &= ~(Mask{1} << k);
-              else gridded |= Mask{1} << k;
-            }
-          }
+          // The plane test's one-root bound, then the texel's grid values.
+          keep = planes(leaves_.plane(n.x, n.y), r, b, top, s, keep, apart, [&](size_t k) {
+            if (s[k].corner_texel_settles(leaf_grid, ox + n.x, oy + n.y)) return true;
+            gridded |= Mask{1} << k;
+            return false;
+          });
         }
         if (keep == 0) continue;
         const std::array<Piece, 4> pieces = texel_pieces(ox, oy, n.x, n.y);
