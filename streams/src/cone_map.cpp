@@ -395,7 +395,8 @@ class ConeSearch {
   // (corner_upper's directions); each one that keeps every grid point at most level()
   // settles the texel. (On the smooth bumps at 256², after the plane test's one-root bound,
   // the centre settles 46 % of the texels it is tried on, the corners 24 % more.)
-  bool corner_texel_settles(const std::array<double, 9>& v, double px, double py) const {
+  // `at` (>= 0): test against that slope instead of level() (the caller's widened level).
+  bool corner_texel_settles(const std::array<double, 9>& v, double px, double py, double at = -1) const {
     const int zx = px >= f_.x1 ? 1 : (px + 1 <= f_.x0 ? -1 : 0);
     const int zy = py >= f_.y1 ? 1 : (py + 1 <= f_.y0 ? -1 : 0);
     if (zx == 0 || zy == 0) return false;
@@ -410,7 +411,7 @@ class ConeSearch {
     // sums below (every term of u . q >= 0: offsets and directions along the zone; T n
     // against S n, both from floats), so that a texel is settled only where the exact
     // comparison would settle it; a borderline one is left to its pieces.
-    const double lvl = level() * (1 - 1e-9);
+    const double lvl = (at >= 0 ? at : level()) * (1 - 1e-9);
     // S - T at the grid points (differences of floats: exact), columns 0 and 1 of each row
     // as a pair, column 2 apart.
     const Pair e0 = load_pair(&v[0]) - top_, e1 = load_pair(&v[3]) - top_, e2 = load_pair(&v[6]) - top_;
@@ -1849,6 +1850,16 @@ class BlockSearch {
           // The plane test's one-root bound, then the texel's grid values.
           keep = planes(leaves_.plane(n.x, n.y), r, b, top, s, keep, apart, [&](size_t k) {
             if (s[k].corner_texel_settles(leaf_grid, ox + n.x, oy + n.y)) return true;
+            // Then at the slope widened by the tolerance, conceding it as under() does: the
+            // leaf holds nothing steeper than psi (1 + tolerance), which becomes the bound
+            // (the stored cone at most that much narrower, never wider). Near the far
+            // tangencies of smooth maps most leaves are within the tolerance of the level and
+            // went to their pieces (bumps, instructions: 256² +0.4 %, 512² -1.5 %, 1024² -3.8 %).
+            const double widened = s[k].psi * (1 + tol_);
+            if (widened > s[k].bound && s[k].corner_texel_settles(leaf_grid, ox + n.x, oy + n.y, widened)) {
+              s[k].bound = widened;
+              return true;
+            }
             gridded |= Mask{1} << k;
             return false;
           });
