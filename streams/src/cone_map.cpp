@@ -386,17 +386,17 @@ class ConeSearch {
 
   // Texel (x, y) of the grid's map shifted by (ox, oy) pixels, off F's rows and columns and
   // not touching F (in a corner zone, whose nearest point of F is its corner c): whether no
-  // point of it can be steeper than the level, from its 3 x 3 grid values `v` alone (no
+  // point of it can be steeper than `slope`, from its 3 x 3 grid values `v` alone (no
   // pieces). As settle()'s first bound for one piece, over the whole texel: dist(y, F) =
   // |y - c| >= u . (y - c) for a unit u, and where u . (y - c) > 0 over the texel,
   // (S - T) / (u . (y - c)) is on each of its four pieces a bilinear over a positive linear
   // function, monotone along each axis, so its supremum over the texel is at one of the 9
   // grid points. u: the direction from c to the texel's centre, then to its four corners
-  // (corner_upper's directions); each one that keeps every grid point at most level()
+  // (corner_upper's directions); each one that keeps every grid point at most `slope`
   // settles the texel. (On the smooth bumps at 256², after the plane test's one-root bound,
   // the centre settles 46 % of the texels it is tried on, the corners 24 % more.)
-  // `at` (>= 0): test against that slope instead of level() (the caller's widened level).
-  bool corner_texel_settles(const std::array<double, 9>& v, double px, double py, double at = -1) const {
+  // `slope`: level(), or the level widened by the tolerance (a concession the caller records).
+  bool corner_texel_settles(const std::array<double, 9>& v, double px, double py, double slope) const {
     const int zx = px >= f_.x1 ? 1 : (px + 1 <= f_.x0 ? -1 : 0);
     const int zy = py >= f_.y1 ? 1 : (py + 1 <= f_.y0 ? -1 : 0);
     if (zx == 0 || zy == 0) return false;
@@ -411,7 +411,7 @@ class ConeSearch {
     // sums below (every term of u . q >= 0: offsets and directions along the zone; T n
     // against S n, both from floats), so that a texel is settled only where the exact
     // comparison would settle it; a borderline one is left to its pieces.
-    const double lvl = (at >= 0 ? at : level()) * (1 - 1e-9);
+    const double lvl = slope * (1 - 1e-9);
     // S - T at the grid points (differences of floats: exact), columns 0 and 1 of each row
     // as a pair, column 2 apart.
     const Pair e0 = load_pair(&v[0]) - top_, e1 = load_pair(&v[3]) - top_, e2 = load_pair(&v[6]) - top_;
@@ -1849,7 +1849,7 @@ class BlockSearch {
           apart &= ~whole;
           // The plane test's one-root bound, then the texel's grid values.
           keep = planes(leaves_.plane(n.x, n.y), r, b, top, s, keep, apart, [&](size_t k) {
-            if (s[k].corner_texel_settles(leaf_grid, ox + n.x, oy + n.y)) return true;
+            if (s[k].corner_texel_settles(leaf_grid, ox + n.x, oy + n.y, s[k].level())) return true;
             // Then at the slope widened by the tolerance, conceding it as under() does: the
             // leaf holds nothing steeper than psi (1 + tolerance), which becomes the bound
             // (the stored cone at most that much narrower, never wider). Near the far
@@ -1868,7 +1868,7 @@ class BlockSearch {
         const std::array<Piece, 4> pieces = texel_pieces(ox, oy, n.x, n.y);
         for (Mask q = keep; q != 0; q &= q - 1) {
           const size_t k = static_cast<size_t>(low_bit(q));
-          if ((whole >> k) & 1 ? !s[k].side_texel_settles(grid_, n.x, n.y, ox, oy) : relaxed_ || ((gridded >> k) & 1) || !s[k].corner_texel_settles(leaf_grid, ox + n.x, oy + n.y))
+          if ((whole >> k) & 1 ? !s[k].side_texel_settles(grid_, n.x, n.y, ox, oy) : relaxed_ || ((gridded >> k) & 1) || !s[k].corner_texel_settles(leaf_grid, ox + n.x, oy + n.y, s[k].level()))
             for (const Piece& p : pieces) s[k].piece(p);
           if (!(s[k].psi < cap[k])) live_ &= ~(Mask{1} << k);
         }
