@@ -197,6 +197,7 @@ TEST(Cli, BadUsageExitsTwo) {
   EXPECT_EQ(run("streams vdm h.exr -o v.exr --relief 1e39").code, 2);
   EXPECT_EQ(run("streams vdm h.exr -o v.exr --relief 11").code, 2) << "beyond 10: a tiling map's rays walked for minutes";
   EXPECT_EQ(run("streams vdm h.exr -o v.exr --curvatures 0,0").code, 2) << "curvatures must increase strictly";
+  EXPECT_EQ(run("streams vdm h.exr -o v.exr --curvatures \"\"").code, 2) << "an empty list given is not the default";
   EXPECT_EQ(run("streams dstream --low a.obj --high b.obj -o d.bin --front 1e39").code, 2);
   EXPECT_EQ(run("streams cone h.exr -o c.exr --tolerance nan").code, 2);
   EXPECT_EQ(run("streams cone h.exr -o c.png").code, 2) << "streams are EXR: refused before any work";

@@ -212,7 +212,7 @@ void add_streams(CLI::App& app, Context& ctx) {
     int curvature_steps = 4, max_rank = 32;
     double max_error = 0.002;
     VdmOptions options;
-    bool relief_given = false;
+    bool relief_given = false, curvatures_given = false;
   };
   auto vdm_args = std::make_shared<StreamArgs>();
   auto vdm = std::make_shared<VdmArgs>();
@@ -229,9 +229,12 @@ void add_streams(CLI::App& app, Context& ctx) {
   vdm_cmd->add_option("--max-rank", vdm->max_rank, "Largest number of PCA components (meso preview takes at most 64)")->check(CLI::Range(0, 4096))->capture_default_str();
   vdm_cmd->callback([&ctx, vdm_args, vdm, vdm_cmd] {
     vdm->relief_given = vdm_cmd->count("--relief") > 0;
+    vdm->curvatures_given = vdm_cmd->count("--curvatures") > 0;
     ctx.run = [&ctx, vdm_args, vdm](nlohmann::json& report, Progress& progress) {
       const auto start = std::chrono::steady_clock::now();
       VdmOptions o = vdm->options;
+      // An empty list given (`--curvatures "$K"` with K unset) is a mistake, not the default.
+      if (vdm->curvatures_given && vdm->curvatures.empty()) throw UsageError("--curvatures: the list is empty (leave the option out for the default)");
       if (!vdm->curvatures.empty()) {
         o.curvatures.clear();
         std::stringstream list(vdm->curvatures);
