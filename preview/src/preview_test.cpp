@@ -797,6 +797,40 @@ TEST(Measure, ReferenceIsWatertightAndDeterministic) {
   }
 }
 
+// The reference does not depend on the mesh's scale: the same sheet and displacement scaled
+// by 2^-24 (a mesh 6e-8 units across, whose half-texel triangles fell under Embree's absolute
+// floors and were missed) and by 2^24 sees the same points, exact cells and tessellated.
+TEST(Measure, ReferenceDoesNotDependOnTheMeshScale) {
+  const Mesh sheet = test::make_parametric(9, 7, [](double s, double t) {
+    return Vec3f(static_cast<float>(0.4 * s + 0.6 * s * s), static_cast<float>(t * t * 0.5 + 0.5 * t), 0.0f);
+  }, false, false);
+  const Mesh bent = test::make_parametric(8, 4, [](double s, double t) {
+    return Vec3f(static_cast<float>(s), static_cast<float>(t), static_cast<float>(0.3 * s * s));
+  }, false, false);
+  const PreviewMaps maps = cone_maps(ConeScene::rough, Border::clamp);
+  for (const Mesh* base : {&sheet, &bent}) {
+    const PreviewOptions o = uv_view(64, 50.0f, 25.0f);
+    const Image unscaled = ReferenceRenderer(*base, maps).render(o);
+    for (const float scale : {std::ldexp(1.0f, -24), std::ldexp(1.0f, 24)}) {
+      Mesh m = *base;
+      for (auto v : m.vertices()) m.set_point(v, m.point(v) * scale);
+      PreviewMaps scaled = maps;
+      for (float& h : scaled.displacement.pixels) h *= scale;
+      const ReferenceRenderer reference(m, scaled);
+      EXPECT_EQ(reference.patch_count() > 0, base == &sheet);
+      const Image img = reference.render(o);
+      size_t covered = 0;
+      for (int y = 0; y < o.height; ++y)
+        for (int x = 0; x < o.width; ++x) {
+          ASSERT_EQ(img.at(x, y, 3), unscaled.at(x, y, 3)) << "pixel " << x << "," << y << " at scale " << scale;
+          covered += img.at(x, y, 3) > 0.5f;
+          for (int c = 0; c < 2; ++c) EXPECT_NEAR(img.at(x, y, c), unscaled.at(x, y, c), 1e-6) << "pixel " << x << "," << y << " at scale " << scale;
+        }
+      EXPECT_GT(covered, 64u * 64u / 5);
+    }
+  }
+}
+
 // Exact cells only where a whole connected part of the base is flat: a sheet flat on one half
 // and bent on the other is tessellated whole (an exact triangle beside a tessellated one would
 // leave a crack along their edge), and the bent half's reference still sees the flat half.

@@ -192,6 +192,11 @@ struct ReferenceRenderer::Impl {
   std::vector<TangentFrame> frames;
   std::vector<BaseTriangle> tris;
   Vec3d origin{0, 0, 0};  // positions are stored relative to the base's centre (bake.cpp's RayScene)
+  // ... and times `unit`, a power of two (exact both ways) that brings the base's half
+  // diagonal into [0.5, 1): Embree's intersectors hold absolute floors (a triangle whose
+  // normal's length is under about 1e-18 is missed), which the 0.5-texel triangles of a
+  // mesh 1e-6 units across fell under (24 % of a reference frame's pixels moved).
+  double unit = 1;
   std::vector<float> positions;   // 4 floats per vertex (Embree's 16-byte loads)
   std::vector<float> barycentrics;  // per vertex: its base barycentrics on corners 1 and 2
   std::vector<uint32_t> indices, triangle_face;
@@ -234,7 +239,8 @@ struct ReferenceRenderer::Impl {
     const int w = displacement.width, h = displacement.height;
     const int xa = texel_index(i, w, wrap), xb = texel_index(i + 1.0, w, wrap), ya = texel_index(j, h, wrap),
               yb = texel_index(j + 1.0, h, wrap);
-    return CellHeights{displacement.at(xa, ya), displacement.at(xb, ya), displacement.at(xa, yb), displacement.at(xb, yb)};
+    // In the scene's units (times `unit`), as the pieces' frames.
+    return CellHeights{displacement.at(xa, ya) * unit, displacement.at(xb, ya) * unit, displacement.at(xa, yb) * unit, displacement.at(xb, yb) * unit};
   }
 
   // The true displaced point over base point `b` of triangle t: P + h(uv) N / |N| with P, N
@@ -312,6 +318,8 @@ struct ReferenceRenderer::Impl {
     }
     const Box3 box = bounding_box(base);
     origin = OpenMesh::vector_cast<Vec3d>(box.center());
+    const double radius = 0.5 * box.diagonal();
+    if (radius > 0 && std::isfinite(radius)) unit = std::ldexp(1.0, -(std::ilogb(radius) + 1));
   }
 
   // The flat triangles' frames and their pieces, one per texel cell they overlap with area,
@@ -325,13 +333,13 @@ struct ReferenceRenderer::Impl {
     const size_t nf = tris.size();
     for (BaseTriangle& t : tris) {
       if (!t.valid) continue;
-      std::array<Vec3d, 3> unit;
-      for (size_t k = 0; k < 3; ++k) unit[k] = t.n[k].norm() > 0 ? t.n[k] / t.n[k].norm() : Vec3d(0, 0, 0);
-      if ((unit[1] - unit[0]).norm() > kFlatNormalTolerance || (unit[2] - unit[0]).norm() > kFlatNormalTolerance) continue;
-      Vec3d n = unit[0] + unit[1] + unit[2];
+      std::array<Vec3d, 3> normal;
+      for (size_t k = 0; k < 3; ++k) normal[k] = t.n[k].norm() > 0 ? t.n[k] / t.n[k].norm() : Vec3d(0, 0, 0);
+      if ((normal[1] - normal[0]).norm() > kFlatNormalTolerance || (normal[2] - normal[0]).norm() > kFlatNormalTolerance) continue;
+      Vec3d n = normal[0] + normal[1] + normal[2];
       if (!(n.norm() > 0.5)) continue;  // zero normals: the tessellation falls back on the face normal
       n /= n.norm();
-      const std::array<Vec3d, 3> p{t.p[0] - origin, t.p[1] - origin, t.p[2] - origin};
+      const std::array<Vec3d, 3> p{(t.p[0] - origin) * unit, (t.p[1] - origin) * unit, (t.p[2] - origin) * unit};
       bool near = true;  // cell indices must fit an int
       for (const Vec2d& q : t.xy) near = near && std::abs(q[0]) < 1e8 && std::abs(q[1]) < 1e8;
       t.patched = near && make_flat_patch_frame(p, t.xy, n, t.patch);
@@ -451,7 +459,7 @@ struct ReferenceRenderer::Impl {
           Part& part;
           EdgeTable edges;
           uint32_t add(const Bary& b) {
-            const Vec3d q = impl.displaced(t, b) - impl.origin;
+            const Vec3d q = (impl.displaced(t, b) - impl.origin) * impl.unit;
             part.positions.insert(part.positions.end(), {static_cast<float>(q[0]), static_cast<float>(q[1]), static_cast<float>(q[2]), 0.0f});
             part.barycentrics.insert(part.barycentrics.end(), {static_cast<float>(b.w[1]), static_cast<float>(b.w[2])});
             return static_cast<uint32_t>(part.positions.size() / 4 - 1);
@@ -646,14 +654,16 @@ struct ReferenceRenderer::Impl {
     if (o.width < 1 || o.height < 1) throw UsageError("reference: image size must be positive");
     const CameraPose pose = frame_camera(base, o.camera, static_cast<float>(o.width) / static_cast<float>(o.height), reach);
     // Embree takes ray origins and geometry within about 1.8e18 of its origin (FLT_LARGE; it
-    // asserts beyond): a mesh or camera farther out is refused rather than crashed on.
+    // asserts beyond): in the scene's units (`unit`) the mesh is within 1 of it, and a camera
+    // farther out is refused rather than crashed on.
     const Box3 box = bounding_box(base);
-    const double reach = std::max((pose.eye_d - origin).norm(), 0.5 * box.diagonal());
-    if (!(reach < 1e18)) {
+    const double radius = 0.5 * box.diagonal();
+    const double eye_reach = std::max((pose.eye_d - origin).norm(), radius);
+    if (!(eye_reach * unit < 1e18)) {
       char need[32];
-      std::snprintf(need, sizeof need, "%.3g", reach);
-      throw UsageError("the reference ray tracer (Embree, float) reaches 1e18 units from the mesh's centre; this mesh and camera need " +
-                       std::string(need) + ": rescale the mesh, or zoom in");
+      std::snprintf(need, sizeof need, "%.3g", radius > 0 ? eye_reach / radius : eye_reach);
+      throw UsageError("the reference ray tracer (Embree, float) reaches 1e18 of the mesh's half diagonals from its centre; this camera needs " +
+                       std::string(need) + ": zoom in");
     }
     Image out(o.width, o.height, 4, 0.0f);
     tbb::parallel_for(tbb::blocked_range<int>(0, o.height), [&](const tbb::blocked_range<int>& rows) {
@@ -661,7 +671,7 @@ struct ReferenceRenderer::Impl {
         for (int x = 0; x < o.width; ++x) {
           Vec3d org, dir;
           pixel_ray(pose, x, y, o.width, o.height, org, dir);
-          org -= origin;
+          org = (org - origin) * unit;
           RayContext rc;
           rtcInitIntersectContext(&rc.context);
           rc.org = org;
