@@ -9,12 +9,14 @@
 #include <assimp/Importer.hpp>
 #include <assimp/LogStream.hpp>
 #include <assimp/config.h>
+#include <assimp/fast_atof.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <charconv>
 #include <cmath>
@@ -133,8 +135,82 @@ bool float_number(const char* t, const char* end) {
   return ec == std::errc() && std::isfinite(static_cast<float>(value));
 }
 
-size_t check_obj_lines(const std::string& text, const std::string& name) {
+// assimp parses an OBJ's numbers with its own fast_atof, which is not correctly rounded: about
+// one value in ten of a mesh 1e-6 across (and "9.63967e-06", which meso's own writer prints
+// for that float) comes back one float step off, so a file meso wrote did not read back bit
+// for bit, and a command that does not move vertices (uvpack pack) moved them by a step.
+// The scan below parses every `v` and `vt` both ways (fast_atof from assimp's header, the
+// same inline function its OBJ reader calls; from_chars, correctly rounded) and keeps the
+// values assimp misreads: read_mesh puts the right ones back. A value misread from two
+// different texts is ambiguous and stays as assimp read it.
+template <size_t N>
+struct ObjFix {
+  std::array<uint32_t, N> read, exact;  // float bits: as assimp reads the values, as the text says
+};
+template <size_t N>
+using ObjFixes = std::vector<ObjFix<N>>;
+
+struct ObjScan {
+  size_t untextured = 0;  // triangles of faces without texture indices when the file has some `vt`
+  ObjFixes<3> positions;
+  ObjFixes<2> texcoords;
+};
+
+// fast_atof's errors are exceptions of assimp's type, whose constructor libassimp does not
+// export: they throw this instead (never, here: only numbers that from_chars accepted are
+// given to it).
+struct FastAtofError : std::runtime_error {
+  template <typename... T>
+  explicit FastAtofError(T&&...) : std::runtime_error("fast_atof") {}
+};
+
+uint32_t float_bits(float x) {
+  uint32_t b = 0;
+  std::memcpy(&b, &x, sizeof b);
+  return b;
+}
+
+// Sorted by what assimp reads, ambiguous entries dropped.
+template <size_t N>
+void settle(ObjFixes<N>& fixes) {
+  std::sort(fixes.begin(), fixes.end(), [](const ObjFix<N>& a, const ObjFix<N>& b) { return a.read < b.read || (a.read == b.read && a.exact < b.exact); });
+  ObjFixes<N> out;
+  for (size_t i = 0; i < fixes.size();) {
+    size_t j = i + 1;
+    bool same = true;
+    for (; j < fixes.size() && fixes[j].read == fixes[i].read; ++j) same = same && fixes[j].exact == fixes[i].exact;
+    if (same) out.push_back(fixes[i]);
+    i = j;
+  }
+  fixes.swap(out);
+}
+
+// `values` with the right bits where assimp misread them.
+template <size_t N>
+void correct(const ObjFixes<N>& fixes, float* values) {
+  if (fixes.empty()) return;
+  std::array<uint32_t, N> key;
+  for (size_t k = 0; k < N; ++k) key[k] = float_bits(values[k]);
+  const auto it = std::lower_bound(fixes.begin(), fixes.end(), key, [](const ObjFix<N>& f, const std::array<uint32_t, N>& k) { return f.read < k; });
+  if (it == fixes.end() || it->read != key) return;
+  for (size_t k = 0; k < N; ++k) std::memcpy(&values[k], &it->exact[k], sizeof(float));
+}
+
+// The number [t, end) (checked by float_number) as assimp and as from_chars read it, into
+// value k of `fix`; whether they differ.
+bool read_both(const char* t, const char* end, ObjFix<3>& fix, size_t k) {
+  double exact = 0;
+  std::from_chars(t + (*t == '+' ? 1 : 0), end, exact);
+  ai_real read = 0;
+  Assimp::fast_atoreal_move<ai_real, FastAtofError>(t, read);
+  fix.read[k] = float_bits(static_cast<float>(read));
+  fix.exact[k] = float_bits(static_cast<float>(exact));
+  return fix.read[k] != fix.exact[k];
+}
+
+ObjScan check_obj_lines(const std::string& text, const std::string& name) {
   const auto blank = [](char c) { return c == ' ' || c == '\t' || c == '\r'; };
+  ObjScan scan;
   long long texcoords = 0, largest = 0;
   size_t line = 0, largest_line = 0, untextured = 0;
   std::string largest_token;
@@ -175,6 +251,8 @@ size_t check_obj_lines(const std::string& text, const std::string& name) {
     q += vt ? 2 : 1;
     const auto where = [&] { return "line " + std::to_string(statement_line); };
     size_t corners = 0, textured = 0, values = 0;
+    ObjFix<3> fix;  // of a `v`, or of a `vt` in its first two
+    bool misread = false;
     while (q < stop) {
       while (q < stop && blank(*q)) ++q;
       const char* t = q;
@@ -184,14 +262,16 @@ size_t check_obj_lines(const std::string& text, const std::string& name) {
       if (v) {
         // x y z, then an optional w or r g b, which assimp reads or ignores: only the position's
         // three values are checked.
-        if (++values > 3) break;
+        if (++values > 3) continue;
         if (!float_number(t, q))
           throw InputError(name, where() + ": vertex coordinate '" + std::string(token) + "' is not a finite number (as a float)");
+        misread |= read_both(t, q, fix, values - 1);
         continue;
       }
       if (vt) {
         if (!float_number(t, q))
           throw InputError(name, where() + ": texture coordinate '" + std::string(token) + "' is not a finite number (as a float)");
+        if (++values <= 2) misread |= read_both(t, q, fix, values - 1);
         continue;
       }
       // v, v/vt, v/vt/vn or v//vn: only the vt index is checked here (assimp checks v's).
@@ -213,6 +293,9 @@ size_t check_obj_lines(const std::string& text, const std::string& name) {
       ++textured;
     }
     if (v && values < 3) throw InputError(name, where() + ": a vertex needs three coordinates (x y z)");
+    // assimp takes x y z as they are from 3 values (and x y z r g b); 4 are x/w y/w z/w.
+    if (v && misread && (values == 3 || values == 6)) scan.positions.push_back(fix);
+    if (vt && misread && values >= 2) scan.texcoords.push_back(ObjFix<2>{{fix.read[0], fix.read[1]}, {fix.exact[0], fix.exact[1]}});
     // (A file cut inside its last face statement is caught here when the cut leaves fewer than
     // three corners: assimp reads such a face as a point or line and drops it.)
     if (f && corners < 3) throw InputError(name, where() + ": a face needs at least three vertices");
@@ -222,7 +305,10 @@ size_t check_obj_lines(const std::string& text, const std::string& name) {
   if (largest > texcoords)
     throw InputError(name, "line " + std::to_string(largest_line) + ": face corner '" + largest_token + "' names texture coordinate " +
                                std::to_string(largest) + ", but the file has " + std::to_string(texcoords));
-  return texcoords > 0 ? untextured : 0;
+  scan.untextured = texcoords > 0 ? untextured : 0;
+  settle(scan.positions);
+  settle(scan.texcoords);
+  return scan;
 }
 
 // assimp's ASCII PLY reader, given fewer elements than the header announces, makes up the
@@ -443,7 +529,7 @@ Mesh read_mesh(const fs::path& path, MeshReadReport* report) {
   if (fs::is_directory(path)) throw InputError(name, "is a folder, not a mesh file");
   const bool obj = lower_ext(path) == ".obj";
   const std::string obj_text = obj ? file_text(path, name) : std::string();
-  const size_t obj_untextured = obj ? check_obj_lines(obj_text, name) : 0;
+  const ObjScan obj_scan = obj ? check_obj_lines(obj_text, name) : ObjScan();
   if (lower_ext(path) == ".ply") check_ply(file_text(path, name), name);
   // A UTF-8 byte-order mark (some Windows tools write one) hides the OBJ's first line from
   // assimp, which then reports an index out of range: such a file is read from memory, past
@@ -505,7 +591,8 @@ Mesh read_mesh(const fs::path& path, MeshReadReport* report) {
     rep.file_vertices += am->mNumVertices;
     for (unsigned i = 0; i < am->mNumVertices; ++i) {
       const aiVector3D p = inst.transform * am->mVertices[i];
-      const Vec3f pf(p.x, p.y, p.z);
+      Vec3f pf(p.x, p.y, p.z);
+      correct(obj_scan.positions, pf.data());  // (an OBJ's transforms are the identity)
       if (!std::isfinite(pf[0]) || !std::isfinite(pf[1]) || !std::isfinite(pf[2]))
         throw InputError(name, "vertex " + std::to_string(rep.file_vertices - am->mNumVertices + i) +
                                    " has a NaN or infinite coordinate");
@@ -548,6 +635,7 @@ Mesh read_mesh(const fs::path& path, MeshReadReport* report) {
           if (am->HasTextureCoords(0)) {
             const aiVector3D t = am->mTextureCoords[0][idx[k]];
             uv = Vec2f(t.x, t.y);
+            correct(obj_scan.texcoords, uv.data());
             if (!std::isfinite(uv[0]) || !std::isfinite(uv[1]))
               throw InputError(name, "face " + std::to_string(mesh.n_faces() - 1) + " has a NaN or infinite texture coordinate");
           }
@@ -577,7 +665,7 @@ Mesh read_mesh(const fs::path& path, MeshReadReport* report) {
   }
   // An OBJ's faces without `vt` inside a textured object are counted only by the scan (assimp
   // gives them UV 0,0); it also counts those of untextured objects, which the loop above saw.
-  if (any_uv) rep.faces_without_uv = std::max(rep.faces_without_uv, obj_untextured);
+  if (any_uv) rep.faces_without_uv = std::max(rep.faces_without_uv, obj_scan.untextured);
   if (any_uv) {
     // Boundary halfedges belong to no face and so got no UV above; OpenMesh leaves them
     // uninitialised. Zero them so nothing downstream reads indeterminate values.

@@ -31,6 +31,9 @@ struct MeshReadReport {
 //    halfedges, so seams survive welding; normals are averaged at welded vertices, or
 //    computed (angle-weighted) when the file has none;
 //  - non-manifold faces and faces with a repeated vertex are kept on separate vertices.
+//  - an OBJ's `v` and `vt` numbers are the floats nearest their text (assimp's parser is one
+//    float step off on some; those are put right), so an OBJ write_obj wrote reads back bit
+//    for bit.
 // Throws InputError naming the file when it is missing, unreadable, has no triangles, has a
 // NaN/infinite coordinate, or the bounding-box diagonal of its faces' vertices lies outside
 // [kMinMeshSpan, kMaxMeshSpan] (0 is allowed: a mesh without extent), beyond which float
