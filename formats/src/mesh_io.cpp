@@ -662,6 +662,20 @@ Mesh read_mesh(const fs::path& path, MeshReadReport* report) {
     if (span > kMaxMeshSpan || (span > 0 && span < kMinMeshSpan))
       throw InputError(name, "its vertices span " + format_number(span) + " units, outside the " + format_number(kMinMeshSpan) + " to " +
                                  format_number(kMaxMeshSpan) + " that float arithmetic holds (rescale the mesh)");
+    // Far from the origin for its size, a mesh has lost its detail to float rounding by now
+    // (see kMaxFloatStepPerEdge): refused, naming the cause, instead of reduced, packed and
+    // baked into garbage (a 2-unit wall of 262k faces moved 1e6 units: 1,590 faces folded or
+    // welded away, every later stage wrong, each exiting 0).
+    const double largest = std::max(lo.max_abs(), hi.max_abs());
+    if (span > 0 && largest > 0) {
+      rep.largest_coordinate = largest;
+      rep.float_step = std::ldexp(1.0, std::ilogb(largest) - 23);
+      rep.typical_edge = span / std::sqrt(static_cast<double>(mesh.n_faces()));
+      if (rep.float_step > kMaxFloatStepPerEdge * rep.typical_edge)
+        throw InputError(name, "its coordinates reach " + format_number(largest) + ", where 32-bit floats step by " + format_number(rep.float_step) +
+                                   ", more than a quarter of a typical edge (" + format_number(rep.typical_edge) +
+                                   "): the mesh lost its shape when read (move it near the origin)");
+    }
   }
   // An OBJ's faces without `vt` inside a textured object are counted only by the scan (assimp
   // gives them UV 0,0); it also counts those of untextured objects, which the loop above saw.

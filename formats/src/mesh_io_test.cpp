@@ -315,6 +315,34 @@ TEST(MeshIo, ExtentsBeyondFloatArithmeticAreRefused) {
   for (const double good : {1e35, 1.0, 1e-29, 0.0}) EXPECT_EQ(read_mesh(triangle("good.obj", good)).n_faces(), 1u) << good;
 }
 
+// A mesh far from the origin for its size has lost its shape to float rounding when read:
+// refused, naming the cause; nearer, the report says how coarse the floats are there (the
+// commands warn past kWarnFloatStepPerEdge).
+TEST(MeshIo, MeshesTooFarFromTheOriginForTheirSizeAreRefused) {
+  test::TempDir dir;
+  const Mesh grid = test::make_grid(64, 64, 2.0f, 2.0f);  // edges of 1/32, 8,192 faces
+  for (const float offset : {0.0f, 1e4f, 1e6f}) {
+    Mesh m = grid;
+    for (auto v : m.vertices()) m.set_point(v, m.point(v) + Vec3f(offset, -offset, 0.5f * offset));
+    write_mesh(m, dir / "far.obj");
+    if (offset == 1e6f) {
+      try {
+        read_mesh(dir / "far.obj");
+        ADD_FAILURE() << "a grid of 1/32-unit edges at 1e6 must be refused (floats step by 0.0625 there)";
+      } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("32-bit floats step by 0.0625"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("far.obj"), std::string::npos) << e.what();
+      }
+      continue;
+    }
+    MeshReadReport r;
+    EXPECT_EQ(read_mesh(dir / "far.obj", &r).n_faces(), 8192u);
+    EXPECT_EQ(r.largest_coordinate, offset == 0 ? 2.0 : static_cast<double>(offset) + 2.0);
+    EXPECT_NEAR(r.typical_edge, std::sqrt(8.0) / std::sqrt(8192.0), 1e-6);
+    EXPECT_EQ(r.float_step > kWarnFloatStepPerEdge * r.typical_edge, offset == 1e4f) << offset;
+  }
+}
+
 // assimp reads an unparsable `vt` value as 0 and, when a face names a `vt` the file lacks,
 // drops every UV of the file: both are refused, naming the line.
 TEST(MeshIo, ObjTextureCoordinatesAreCheckedNotRepaired) {

@@ -20,7 +20,18 @@ struct MeshReadReport {
                                    // a vertex: kept, in order, on vertices of their own
   size_t faces_without_uv = 0;     // faces of file meshes that had no UVs (given UV 0,0)
   bool had_normals = false;        // the file gave normals for every vertex
+  // Float precision where the mesh lies: its largest coordinate (absolute), the step between
+  // 32-bit floats there, and a typical edge length (bounding-box diagonal / sqrt(faces)), all
+  // object units (0 for a mesh without extent). A step over kWarnFloatStepPerEdge of an edge
+  // has rounded away detail that the maps would carry.
+  double largest_coordinate = 0, float_step = 0, typical_edge = 0;
 };
+
+// Float step at the largest coordinate against a typical edge: beyond kMaxFloatStepPerEdge
+// read_mesh refuses the mesh (faces fold and weld together: a 2-unit mesh 1e6 units from the
+// origin, where floats step by 0.0625); beyond kWarnFloatStepPerEdge the commands warn (at
+// 1/256 of an edge, the displacement of a bake loses about 1 % of its range).
+constexpr double kMaxFloatStepPerEdge = 0.25, kWarnFloatStepPerEdge = 1.0 / 256;
 
 // Reads a mesh file into the pipeline's Mesh:
 //  - coordinates are the file's own (a COLLADA up_axis is not applied);
@@ -35,9 +46,10 @@ struct MeshReadReport {
 //    float step off on some; those are put right), so an OBJ write_obj wrote reads back bit
 //    for bit.
 // Throws InputError naming the file when it is missing, unreadable, has no triangles, has a
-// NaN/infinite coordinate, or the bounding-box diagonal of its faces' vertices lies outside
+// NaN/infinite coordinate, the bounding-box diagonal of its faces' vertices lies outside
 // [kMinMeshSpan, kMaxMeshSpan] (0 is allowed: a mesh without extent), beyond which float
-// distances, areas and curvatures overflow or vanish.
+// distances, areas and curvatures overflow or vanish, or the mesh lies so far from the origin
+// for its size that float rounding has taken its shape (kMaxFloatStepPerEdge).
 constexpr double kMinMeshSpan = 1e-30, kMaxMeshSpan = 1e36;
 Mesh read_mesh(const std::filesystem::path& path, MeshReadReport* report = nullptr);
 
