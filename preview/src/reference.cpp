@@ -193,9 +193,9 @@ struct ReferenceRenderer::Impl {
   std::vector<BaseTriangle> tris;
   Vec3d origin{0, 0, 0};  // positions are stored relative to the base's centre (bake.cpp's RayScene)
   // ... and times `unit`, a power of two (exact both ways) that brings the base's half
-  // diagonal into [0.5, 1): Embree's intersectors hold absolute floors (a triangle whose
-  // normal's length is under about 1e-18 is missed), which the 0.5-texel triangles of a
-  // mesh 1e-6 units across fell under (24 % of a reference frame's pixels moved).
+  // diagonal into [0.5, 1): Embree's intersectors hold absolute floors, under which the
+  // half-texel triangles of a mesh 1e-6 units across fell (the demo's bricks scaled by 1e-6:
+  // half of the reference's visible points moved, by up to half a texel).
   double unit = 1;
   std::vector<float> positions;   // 4 floats per vertex (Embree's 16-byte loads)
   std::vector<float> barycentrics;  // per vertex: its base barycentrics on corners 1 and 2
