@@ -125,6 +125,7 @@ std::string file_text(const fs::path& path, const std::string& name) {
 // inf). One too small for a double (1e-400) is 0 to assimp, and here.
 bool float_number(const char* t, const char* end) {
   const char* a = t + (*t == '+' ? 1 : 0);
+  if (a > t && a < end && (*a == '-' || *a == '+')) return false;  // "+-1": from_chars would read -1, assimp nothing
   double value = 0;
   const auto [ptr, ec] = std::from_chars(a, end, value);
   if (ptr != end) return false;
@@ -139,11 +140,12 @@ bool float_number(const char* t, const char* end) {
 // of the values of MeshIo.ObjReadsEveryShortestFloatTextExactly (scales 1e-12 to 1.7e7), among
 // them "9.63967e-06", which meso's own writer prints for that float, came back one float step
 // off, so a file meso wrote did not read back bit for bit, and a command that does not move
-// vertices (uvpack pack) moved them by a step.
-// The scan below parses every `v` and `vt` both ways (fast_atof from assimp's header, the
-// same inline function its OBJ reader calls; from_chars, correctly rounded) and keeps the
-// values assimp misreads: read_mesh puts the right ones back. A value misread from two
-// different texts is ambiguous and stays as assimp read it.
+// vertices (uvpack pack) moved them by a step. The scan below reads every `v` and `vt` both
+// ways (fast_atof from assimp's header, the inline function its OBJ reader calls; from_chars
+// into a float, correctly rounded) and keeps the values assimp misreads, keyed by what assimp
+// read: read_mesh puts the right ones back. A key is dropped when it is ambiguous, i.e. when
+// two texts that read differently were misread to it, or when some text assimp read right
+// (or a `v x y z w`, which assimp divides by w) gives it too: that vertex must stay as it is.
 template <size_t N>
 struct ObjFix {
   std::array<uint32_t, N> read, exact;  // float bits: as assimp reads the values, as the text says
@@ -158,8 +160,7 @@ struct ObjScan {
 };
 
 // fast_atof's errors are exceptions of assimp's type, whose constructor libassimp does not
-// export: they throw this instead (never, here: only numbers that from_chars accepted are
-// given to it).
+// export: they throw this instead, and such a value is left to assimp, which refuses the file.
 struct FastAtofError : std::runtime_error {
   template <typename... T>
   explicit FastAtofError(T&&...) : std::runtime_error("fast_atof") {}
@@ -171,47 +172,66 @@ uint32_t float_bits(float x) {
   return b;
 }
 
-// Sorted by what assimp reads, ambiguous entries dropped.
+// A position's bits as read_mesh sees them: the node transform (the identity for an OBJ)
+// turns -0 into +0.
+uint32_t position_bits(float x) { return float_bits(x == 0.0f ? 0.0f : x); }
+
 template <size_t N>
-void settle(ObjFixes<N>& fixes) {
+uint64_t key_hash(const std::array<uint32_t, N>& k) {
+  uint64_t h = 0x9E3779B97F4A7C15ull;
+  for (uint32_t b : k) {
+    h ^= b;
+    h *= 0xBF58476D1CE4E5B9ull;
+    h ^= h >> 31;
+  }
+  return h;
+}
+
+// Sorted by what assimp reads; ambiguous keys dropped (`right`: hashes of keys that texts
+// assimp read right also give; a hash collision only drops a correction, never adds one).
+template <size_t N>
+void settle(ObjFixes<N>& fixes, std::vector<uint64_t>& right) {
+  std::sort(right.begin(), right.end());
   std::sort(fixes.begin(), fixes.end(), [](const ObjFix<N>& a, const ObjFix<N>& b) { return a.read < b.read || (a.read == b.read && a.exact < b.exact); });
   ObjFixes<N> out;
   for (size_t i = 0; i < fixes.size();) {
     size_t j = i + 1;
     bool same = true;
     for (; j < fixes.size() && fixes[j].read == fixes[i].read; ++j) same = same && fixes[j].exact == fixes[i].exact;
-    if (same) out.push_back(fixes[i]);
+    if (same && !std::binary_search(right.begin(), right.end(), key_hash(fixes[i].read))) out.push_back(fixes[i]);
     i = j;
   }
   fixes.swap(out);
+  right = std::vector<uint64_t>();
 }
 
-// `values` with the right bits where assimp misread them.
+// `values` with the right bits where assimp misread them (`key`: the bits of `values` as the
+// table is keyed).
 template <size_t N>
-void correct(const ObjFixes<N>& fixes, float* values) {
-  if (fixes.empty()) return;
-  std::array<uint32_t, N> key;
-  for (size_t k = 0; k < N; ++k) key[k] = float_bits(values[k]);
+void correct(const ObjFixes<N>& fixes, const std::array<uint32_t, N>& key, float* values) {
   const auto it = std::lower_bound(fixes.begin(), fixes.end(), key, [](const ObjFix<N>& f, const std::array<uint32_t, N>& k) { return f.read < k; });
   if (it == fixes.end() || it->read != key) return;
   for (size_t k = 0; k < N; ++k) std::memcpy(&values[k], &it->exact[k], sizeof(float));
 }
 
-// The number [t, end) (checked by float_number) as assimp and as from_chars read it, into
-// value k of `fix`; whether they differ.
-bool read_both(const char* t, const char* end, ObjFix<3>& fix, size_t k) {
-  double exact = 0;
+// The number [t, end) (checked by float_number) as assimp reads it (false: fast_atof refuses
+// it) and as the text says, correctly rounded.
+bool read_both(const char* t, const char* end, float& read, float& exact) {
   std::from_chars(t + (*t == '+' ? 1 : 0), end, exact);
-  ai_real read = 0;
-  Assimp::fast_atoreal_move<ai_real, FastAtofError>(t, read);
-  fix.read[k] = float_bits(static_cast<float>(read));
-  fix.exact[k] = float_bits(static_cast<float>(exact));
-  return fix.read[k] != fix.exact[k];
+  try {
+    ai_real r = 0;
+    Assimp::fast_atoreal_move<ai_real, FastAtofError>(t, r);
+    read = static_cast<float>(r);
+    return true;
+  } catch (const FastAtofError&) {
+    return false;
+  }
 }
 
 ObjScan check_obj_lines(const std::string& text, const std::string& name) {
   const auto blank = [](char c) { return c == ' ' || c == '\t' || c == '\r'; };
   ObjScan scan;
+  std::vector<uint64_t> right_positions, right_texcoords;  // keys assimp read right (settle())
   long long texcoords = 0, largest = 0;
   size_t line = 0, largest_line = 0, untextured = 0;
   std::string largest_token;
@@ -252,8 +272,8 @@ ObjScan check_obj_lines(const std::string& text, const std::string& name) {
     q += vt ? 2 : 1;
     const auto where = [&] { return "line " + std::to_string(statement_line); };
     size_t corners = 0, textured = 0, values = 0;
-    ObjFix<3> fix;  // of a `v`, or of a `vt` in its first two
-    bool misread = false;
+    float read[4] = {0, 0, 0, 0}, exact[4] = {0, 0, 0, 0};  // a `v`'s first four values, a `vt`'s first two
+    bool readable = true;  // by fast_atof
     while (q < stop) {
       while (q < stop && blank(*q)) ++q;
       const char* t = q;
@@ -263,16 +283,19 @@ ObjScan check_obj_lines(const std::string& text, const std::string& name) {
       if (v) {
         // x y z, then an optional w or r g b, which assimp reads or ignores: only the position's
         // three values are checked.
-        if (++values > 3) continue;
+        if (++values > 3) {
+          if (values == 4 && float_number(t, q)) readable = read_both(t, q, read[3], exact[3]) && readable;
+          continue;
+        }
         if (!float_number(t, q))
           throw InputError(name, where() + ": vertex coordinate '" + std::string(token) + "' is not a finite number (as a float)");
-        misread |= read_both(t, q, fix, values - 1);
+        readable = read_both(t, q, read[values - 1], exact[values - 1]) && readable;
         continue;
       }
       if (vt) {
         if (!float_number(t, q))
           throw InputError(name, where() + ": texture coordinate '" + std::string(token) + "' is not a finite number (as a float)");
-        if (++values <= 2) misread |= read_both(t, q, fix, values - 1);
+        if (++values <= 2) readable = read_both(t, q, read[values - 1], exact[values - 1]) && readable;
         continue;
       }
       // v, v/vt, v/vt/vn or v//vn: only the vt index is checked here (assimp checks v's).
@@ -294,9 +317,26 @@ ObjScan check_obj_lines(const std::string& text, const std::string& name) {
       ++textured;
     }
     if (v && values < 3) throw InputError(name, where() + ": a vertex needs three coordinates (x y z)");
-    // assimp takes x y z as they are from 3 values (and x y z r g b); 4 are x/w y/w z/w.
-    if (v && misread && (values == 3 || values == 6)) scan.positions.push_back(fix);
-    if (vt && misread && values >= 2) scan.texcoords.push_back(ObjFix<2>{{fix.read[0], fix.read[1]}, {fix.exact[0], fix.exact[1]}});
+    // assimp takes x y z as they are from 3 values (and x y z r g b), x/w y/w z/w from 4 (those
+    // are not corrected, but their keys must not be), the first two of a `vt`'s 2 or 3.
+    if (v && readable && (values == 3 || values == 4 || values == 6)) {
+      ObjFix<3> fix;
+      for (size_t k = 0; k < 3; ++k) {
+        fix.read[k] = position_bits(values == 4 ? read[k] / read[3] : read[k]);
+        fix.exact[k] = position_bits(exact[k]);
+      }
+      if (values != 4 && fix.read != fix.exact)
+        scan.positions.push_back(fix);
+      else
+        right_positions.push_back(key_hash(fix.read));
+    }
+    if (vt && readable && values >= 2) {
+      const ObjFix<2> fix{{float_bits(read[0]), float_bits(read[1])}, {float_bits(exact[0]), float_bits(exact[1])}};
+      if (fix.read != fix.exact)
+        scan.texcoords.push_back(fix);
+      else
+        right_texcoords.push_back(key_hash(fix.read));
+    }
     // (A file cut inside its last face statement is caught here when the cut leaves fewer than
     // three corners: assimp reads such a face as a point or line and drops it.)
     if (f && corners < 3) throw InputError(name, where() + ": a face needs at least three vertices");
@@ -307,8 +347,8 @@ ObjScan check_obj_lines(const std::string& text, const std::string& name) {
     throw InputError(name, "line " + std::to_string(largest_line) + ": face corner '" + largest_token + "' names texture coordinate " +
                                std::to_string(largest) + ", but the file has " + std::to_string(texcoords));
   scan.untextured = texcoords > 0 ? untextured : 0;
-  settle(scan.positions);
-  settle(scan.texcoords);
+  settle(scan.positions, right_positions);
+  settle(scan.texcoords, right_texcoords);
   return scan;
 }
 
@@ -593,7 +633,8 @@ Mesh read_mesh(const fs::path& path, MeshReadReport* report) {
     for (unsigned i = 0; i < am->mNumVertices; ++i) {
       const aiVector3D p = inst.transform * am->mVertices[i];
       Vec3f pf(p.x, p.y, p.z);
-      correct(obj_scan.positions, pf.data());  // (an OBJ's transforms are the identity)
+      if (!obj_scan.positions.empty())  // (an OBJ's transform is the identity)
+        correct(obj_scan.positions, {position_bits(pf[0]), position_bits(pf[1]), position_bits(pf[2])}, pf.data());
       if (!std::isfinite(pf[0]) || !std::isfinite(pf[1]) || !std::isfinite(pf[2]))
         throw InputError(name, "vertex " + std::to_string(rep.file_vertices - am->mNumVertices + i) +
                                    " has a NaN or infinite coordinate");
@@ -636,7 +677,7 @@ Mesh read_mesh(const fs::path& path, MeshReadReport* report) {
           if (am->HasTextureCoords(0)) {
             const aiVector3D t = am->mTextureCoords[0][idx[k]];
             uv = Vec2f(t.x, t.y);
-            correct(obj_scan.texcoords, uv.data());
+            if (!obj_scan.texcoords.empty()) correct(obj_scan.texcoords, {float_bits(uv[0]), float_bits(uv[1])}, uv.data());
             if (!std::isfinite(uv[0]) || !std::isfinite(uv[1]))
               throw InputError(name, "face " + std::to_string(mesh.n_faces() - 1) + " has a NaN or infinite texture coordinate");
           }
@@ -666,16 +707,30 @@ Mesh read_mesh(const fs::path& path, MeshReadReport* report) {
     // Far from the origin for its size, a mesh has lost its detail to float rounding by now
     // (see kMaxFloatStepPerEdge): refused, naming the cause, instead of reduced, packed and
     // baked into garbage (a 2-unit wall of 262k faces moved 1e6 units: 1,590 faces folded or
-    // welded away, every later stage wrong, each exiting 0).
+    // welded away, every later stage wrong, each exiting 0). Measured per edge, at the edge's
+    // own place (the step at its larger coordinate over its length, in double: a float's
+    // square underflows below 1e-19), then the median: a scene of small parts near the origin
+    // and a large one far out is intact, and so are layers stacked in a box, which an "edge"
+    // estimated from the box and the face count had taken for a coarse sheet.
     const double largest = std::max(lo.max_abs(), hi.max_abs());
     if (span > 0 && largest > 0) {
+      const auto step_at = [](double m) { return m > 0 ? std::max(std::ldexp(1.0, std::ilogb(m) - 23), std::ldexp(1.0, -149)) : 0.0; };
+      std::vector<double> ratios;
+      ratios.reserve(mesh.n_edges());
+      for (auto e : mesh.edges()) {  // (every edge is a face's: isolated vertices have none)
+        const auto h = mesh.halfedge_handle(e, 0);
+        const OpenMesh::Vec3d a = OpenMesh::vector_cast<OpenMesh::Vec3d>(mesh.point(mesh.from_vertex_handle(h)));
+        const OpenMesh::Vec3d b = OpenMesh::vector_cast<OpenMesh::Vec3d>(mesh.point(mesh.to_vertex_handle(h)));
+        const double length = (b - a).norm(), step = step_at(std::max(a.max_abs(), b.max_abs()));
+        ratios.push_back(length > 0 ? step / length : std::numeric_limits<double>::infinity());
+      }
+      std::nth_element(ratios.begin(), ratios.begin() + static_cast<std::ptrdiff_t>(ratios.size() / 2), ratios.end());
       rep.largest_coordinate = largest;
-      rep.float_step = std::ldexp(1.0, std::ilogb(largest) - 23);
-      rep.typical_edge = span / std::sqrt(static_cast<double>(mesh.n_faces()));
-      if (rep.float_step > kMaxFloatStepPerEdge * rep.typical_edge)
+      rep.float_step = step_at(largest);
+      rep.step_per_edge = ratios[ratios.size() / 2];
+      if (rep.step_per_edge > kMaxFloatStepPerEdge)
         throw InputError(name, "its coordinates reach " + format_number(largest) + ", where 32-bit floats step by " + format_number(rep.float_step) +
-                                   ", more than a quarter of a typical edge (" + format_number(rep.typical_edge) +
-                                   "): the mesh lost its shape when read (move it near the origin)");
+                                   ", and at its median edge the step exceeds a quarter of the edge: the mesh lost its shape when read (move it near the origin)");
     }
   }
   // An OBJ's faces without `vt` inside a textured object are counted only by the scan (assimp

@@ -170,6 +170,34 @@ TEST(MeshIo, ObjReadsEveryShortestFloatTextExactly) {
   EXPECT_EQ(wrong_t, 0u) << "of " << 2 * texcoords.size() << " texture coordinates";
 }
 
+// The corrections never move a value that assimp read right: a vertex whose text assimp reads
+// right keeps its value even when another text is misread to the same bits (an unused
+// "7.83099e-06" is read as the float of "7.8309895e-06"; an unused 1e20 overflows assimp's
+// integer parse to 0), and a text assimp cannot read ("+-1") is refused, naming its line.
+TEST(MeshIo, ObjCorrectionsNeverMoveAValueAssimpReadRight) {
+  test::TempDir dir;
+  for (const char* stray : {"7.83099e-06 0 0", "100000000000000000000 0 0"}) {
+    test::write_text(dir / "stray.obj", std::string("v ") + stray + "\nv 7.8309895e-06 0 0\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n"
+                                        "f 2/1 4/2 5/3\nf 3/1 4/2 5/3\n");
+    const Mesh m = read_mesh(dir / "stray.obj");
+    std::vector<float> xs;
+    for (auto v : m.vertices()) xs.push_back(m.point(v)[0]);
+    EXPECT_NE(std::find(xs.begin(), xs.end(), 7.8309895e-06f), xs.end()) << stray;
+    EXPECT_NE(std::find(xs.begin(), xs.end(), 0.0f), xs.end()) << stray;
+  }
+  // Read correctly rounded, not through a double (2^60 + 2^36 + 1 lies just above the midpoint
+  // between two floats; through a double it rounds down twice).
+  test::write_text(dir / "mid.obj", "v 1152921573326323713 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\n");
+  EXPECT_EQ(read_mesh(dir / "mid.obj").point(VertexHandle(0))[0], 1152921642045800448.0f);
+  test::write_text(dir / "sign.obj", "v +-1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\n");
+  try {
+    read_mesh(dir / "sign.obj");
+    ADD_FAILURE() << "+-1 is no number";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("line 1"), std::string::npos) << e.what();
+  }
+}
+
 // OpenMesh leaves a new halfedge's texcoord uninitialised, and nothing sets a boundary
 // halfedge's (it has no face, so no corner). OpenMesh's OBJ writer reads them anyway (valgrind
 // showed its texcoord map keyed by uninitialised floats), so whatever garbage they hold reached
@@ -330,7 +358,7 @@ TEST(MeshIo, MeshesTooFarFromTheOriginForTheirSizeAreRefused) {
         read_mesh(dir / "far.obj");
         ADD_FAILURE() << "a grid of 1/32-unit edges at 1e6 must be refused (floats step by 0.0625 there)";
       } catch (const InputError& e) {
-        EXPECT_NE(std::string(e.what()).find("32-bit floats step by 0.0625"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("32-bit floats step by 0.0625, and at its median edge"), std::string::npos) << e.what();
         EXPECT_NE(std::string(e.what()).find("far.obj"), std::string::npos) << e.what();
       }
       continue;
@@ -338,9 +366,30 @@ TEST(MeshIo, MeshesTooFarFromTheOriginForTheirSizeAreRefused) {
     MeshReadReport r;
     EXPECT_EQ(read_mesh(dir / "far.obj", &r).n_faces(), 8192u);
     EXPECT_EQ(r.largest_coordinate, offset == 0 ? 2.0 : static_cast<double>(offset) + 2.0);
-    EXPECT_NEAR(r.typical_edge, std::sqrt(8.0) / std::sqrt(8192.0), 1e-6);
-    EXPECT_EQ(r.float_step > kWarnFloatStepPerEdge * r.typical_edge, offset == 1e4f) << offset;
+    if (offset == 1e4f) {
+      EXPECT_EQ(r.step_per_edge, 1.0 / 32);  // steps of 1/1024 on edges of 1/32
+    }
+    EXPECT_EQ(r.step_per_edge > kWarnFloatStepPerEdge, offset == 1e4f) << offset;
   }
+  // Layers stacked in a box (here 20 unit grids, 2^20 units out, where floats step by 1/8 of
+  // their edges) are intact: the box and the face count alone (an "edge" of the diagonal over
+  // sqrt(faces)) had refused them.
+  Mesh layers;
+  for (int z = 0; z < 20; ++z) {
+    Mesh g = test::make_grid(8, 8, 8.0f, 8.0f);
+    std::vector<VertexHandle> at;
+    for (auto v : g.vertices()) at.push_back(layers.add_vertex(g.point(v) + Vec3f(1048576.0f, 1048576.0f, static_cast<float>(z))));
+    for (auto f : g.faces()) {
+      std::vector<VertexHandle> corners;
+      for (auto v : g.fv_range(f)) corners.push_back(at[static_cast<size_t>(v.idx())]);
+      layers.add_face(corners);
+    }
+  }
+  write_mesh(layers, dir / "layers.obj");
+  MeshReadReport r;
+  EXPECT_EQ(read_mesh(dir / "layers.obj", &r).n_faces(), 20u * 128u);
+  EXPECT_EQ(r.float_step, 0.125);
+  EXPECT_EQ(r.step_per_edge, 0.125);
 }
 
 // assimp reads an unparsable `vt` value as 0 and, when a face names a `vt` the file lacks,

@@ -20,17 +20,17 @@ struct MeshReadReport {
                                    // a vertex: kept, in order, on vertices of their own
   size_t faces_without_uv = 0;     // faces of file meshes that had no UVs (given UV 0,0)
   bool had_normals = false;        // the file gave normals for every vertex
-  // Float precision where the mesh lies: its largest coordinate (absolute), the step between
-  // 32-bit floats there, and a typical edge length (bounding-box diagonal / sqrt(faces)), all
-  // object units (0 for a mesh without extent). A step over kWarnFloatStepPerEdge of an edge
-  // has rounded away detail that the maps would carry.
-  double largest_coordinate = 0, float_step = 0, typical_edge = 0;
+  // Float precision where the mesh lies: its largest coordinate (absolute) and the step
+  // between 32-bit floats there (object units), and the median over its edges of the step at
+  // the edge's place (its larger coordinate) over the edge's length (0 for a mesh without
+  // extent). Over kWarnFloatStepPerEdge, rounding has taken detail that the maps would carry.
+  double largest_coordinate = 0, float_step = 0, step_per_edge = 0;
 };
 
-// Float step at the largest coordinate against a typical edge: beyond kMaxFloatStepPerEdge
-// read_mesh refuses the mesh (faces fold and weld together: a 2-unit mesh 1e6 units from the
-// origin, where floats step by 0.0625); beyond kWarnFloatStepPerEdge the commands warn (at
-// 1/256 of an edge, the displacement of a bake loses about 1 % of its range).
+// The median step per edge (MeshReadReport::step_per_edge) beyond which read_mesh refuses the
+// mesh (its faces have folded and welded together: a 2-unit mesh 1e6 units from the origin,
+// where floats step by 0.0625), and beyond which the commands warn (at 1/256 of an edge, the
+// displacement of a bake loses about 1 % of its range).
 constexpr double kMaxFloatStepPerEdge = 0.25, kWarnFloatStepPerEdge = 1.0 / 256;
 
 // Reads a mesh file into the pipeline's Mesh:
