@@ -29,8 +29,10 @@ struct MeshReadReport {
 
 // The median step per edge (MeshReadReport::step_per_edge) beyond which read_mesh refuses the
 // mesh (its faces have folded and welded together: a 2-unit mesh 1e6 units from the origin,
-// where floats step by 0.0625), and beyond which the commands warn (at 1/256 of an edge, the
-// displacement of a bake loses about 1 % of its range).
+// where floats step by 0.0625), and beyond which the commands warn. The warning's 1/256 is a
+// choice, not a measured threshold; one point measured above it: the demo's meshes scaled by
+// 1e3 and moved 1e6 (a step of 1.6 % of the high mesh's median edge) baked a displacement off
+// by up to 1.7 % of its range, 0.13 % on average.
 constexpr double kMaxFloatStepPerEdge = 0.25, kWarnFloatStepPerEdge = 1.0 / 256;
 
 // Reads a mesh file into the pipeline's Mesh:
