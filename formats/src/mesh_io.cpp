@@ -271,7 +271,7 @@ ObjScan check_obj_lines(const std::string& text, const std::string& name) {
     if (!vt && !v && !f) continue;
     q += vt ? 2 : 1;
     const auto where = [&] { return "line " + std::to_string(statement_line); };
-    size_t corners = 0, textured = 0, values = 0;
+    size_t corners = 0, textured = 0, with_normal = 0, values = 0;
     float read[4] = {0, 0, 0, 0}, exact[4] = {0, 0, 0, 0};  // a `v`'s first four values, a `vt`'s first two
     bool readable = true;  // by fast_atof
     while (q < stop) {
@@ -301,6 +301,10 @@ ObjScan check_obj_lines(const std::string& text, const std::string& name) {
       // v, v/vt, v/vt/vn or v//vn: only the vt index is checked here (assimp checks v's).
       ++corners;
       const size_t slash = token.find('/');
+      if (slash != std::string_view::npos) {
+        const size_t second = token.find('/', slash + 1);
+        with_normal += second != std::string_view::npos && second + 1 < token.size();
+      }
       if (slash == std::string_view::npos || slash + 1 >= token.size() || token[slash + 1] == '/') continue;
       const char* a = t + slash + 1;
       long long index = 0;
@@ -340,6 +344,15 @@ ObjScan check_obj_lines(const std::string& text, const std::string& name) {
     // (A file cut inside its last face statement is caught here when the cut leaves fewer than
     // three corners: assimp reads such a face as a point or line and drops it.)
     if (f && corners < 3) throw InputError(name, where() + ": a face needs at least three vertices");
+    // The OBJ format gives every corner of a face the same form. assimp reads a face whose
+    // corners mix them (f 1/1 2 3/3) by position in its lists, so each corner after the
+    // first without one takes the next corner's texture coordinate (or normal): refused.
+    if (f && textured > 0 && textured < corners)
+      throw InputError(name, where() + ": " + std::to_string(textured) + " of the face's " + std::to_string(corners) +
+                                 " corners name a texture coordinate (v/vt), the others none: give every corner one, or none");
+    if (f && with_normal > 0 && with_normal < corners)
+      throw InputError(name, where() + ": " + std::to_string(with_normal) + " of the face's " + std::to_string(corners) +
+                                 " corners name a normal (v/vt/vn or v//vn), the others none: give every corner one, or none");
     if (vt) ++texcoords;
     if (f && textured == 0 && corners >= 3) untextured += corners - 2;  // assimp fans a polygon into n - 2 triangles
   }
@@ -360,7 +373,10 @@ ObjScan check_obj_lines(const std::string& text, const std::string& name) {
 // in ASCII; in binary, elements without lists in one step, lists by their counts.
 void check_ply(const std::string& text, const std::string& name) {
   const size_t header_end = text.find("end_header");
-  if (text.compare(0, 3, "ply") != 0 || header_end == std::string::npos) return;  // assimp says what is wrong
+  if (text.compare(0, 3, "ply") != 0) return;  // assimp says what is wrong
+  // assimp 5.2's PLY reader never returns from a header without its end (a file cut inside
+  // its header, or a hand-written one): refused here.
+  if (header_end == std::string::npos) throw InputError(name, "its header has no end_header line (the file is cut short or damaged)");
   struct Property {
     bool list = false;
     size_t size = 0;       // bytes of the value, or of a list's count (0: a type assimp will refuse)
@@ -479,6 +495,67 @@ void check_ply(const std::string& text, const std::string& name) {
       }
 }
 
+// What assimp 5.2's glTF 2.0 reader would read wrong without failing, refused: a required
+// extension it does not implement (KHR_mesh_quantization's integer positions came in 1e-39
+// across, EXT_meshopt_compression's buffers as if plain), and positions, normals or texture
+// coordinates stored as normalised integers, which core glTF allows for texture coordinates
+// (it takes their bytes for floats: UVs of 9e-41, or NaN). Extensions of materials, textures
+// and lights leave the geometry as it is and are let through. A file that is not JSON is
+// left to assimp, which says what is wrong.
+void check_gltf(const std::string& text, const std::string& name) {
+  std::string_view json = text;
+  if (text.compare(0, 4, "glTF") == 0) {
+    // Binary glTF: a 12-byte header, then chunks of (length, type, data); the first is JSON.
+    if (text.size() < 20 || text.compare(16, 4, "JSON") != 0) return;
+    uint32_t length = 0;
+    std::memcpy(&length, text.data() + 12, 4);  // little-endian, as the machines meso runs on
+    if (length > text.size() - 20) return;
+    json = std::string_view(text.data() + 20, length);
+  }
+  const nlohmann::json doc = nlohmann::json::parse(json.begin(), json.end(), nullptr, false);
+  if (doc.is_discarded() || !doc.is_object()) return;
+  if (const auto it = doc.find("extensionsRequired"); it != doc.end() && it->is_array())
+    for (const auto& e : *it) {
+      if (!e.is_string()) continue;
+      const std::string ext = e.get<std::string>();
+      if (ext.rfind("KHR_materials_", 0) == 0 || ext == "KHR_texture_transform" || ext == "KHR_texture_basisu" || ext == "EXT_texture_webp" ||
+          ext == "KHR_lights_punctual")
+        continue;
+      throw InputError(name, "requires the glTF extension " + ext + ", which meso cannot read (export without it)");
+    }
+  const auto meshes = doc.find("meshes");
+  const auto accessors = doc.find("accessors");
+  if (meshes == doc.end() || !meshes->is_array() || accessors == doc.end() || !accessors->is_array()) return;
+  const auto type_name = [](int t) -> std::string {
+    switch (t) {
+      case 5120: return "bytes";
+      case 5121: return "unsigned bytes";
+      case 5122: return "shorts";
+      case 5123: return "unsigned shorts";
+      case 5125: return "unsigned ints";
+      default: return "component type " + std::to_string(t);
+    }
+  };
+  for (size_t m = 0; m < meshes->size(); ++m) {
+    const auto& mesh = (*meshes)[m];
+    if (!mesh.is_object() || !mesh.contains("primitives") || !mesh["primitives"].is_array()) continue;
+    for (const auto& primitive : mesh["primitives"]) {
+      if (!primitive.is_object() || !primitive.contains("attributes") || !primitive["attributes"].is_object()) continue;
+      for (const char* attribute : {"POSITION", "NORMAL", "TEXCOORD_0"}) {
+        const auto a = primitive["attributes"].find(attribute);
+        if (a == primitive["attributes"].end() || !a->is_number_unsigned()) continue;
+        const size_t index = a->get<size_t>();
+        if (index >= accessors->size() || !(*accessors)[index].is_object()) continue;  // assimp refuses it
+        const auto type = (*accessors)[index].find("componentType");
+        if (type == (*accessors)[index].end() || !type->is_number_integer() || type->get<int>() == 5126) continue;
+        const std::string mesh_name = mesh.contains("name") && mesh["name"].is_string() ? "'" + mesh["name"].get<std::string>() + "'" : std::to_string(m);
+        throw InputError(name, "mesh " + mesh_name + " stores " + attribute + " as " + type_name(type->get<int>()) +
+                                   ", which meso's glTF reader (assimp 5.2) misreads: export it as floats");
+      }
+    }
+  }
+}
+
 // Some of assimp's readers repair a file without failing: they drop faces whose indices are
 // out of range (glTF) or point them elsewhere (OFF), and only say so in their log. A file
 // meso would read differently from what it says is refused, so assimp's log is collected
@@ -562,6 +639,86 @@ void collect(const aiScene* scene, const aiNode* node, const aiMatrix4x4& parent
   for (unsigned i = 0; i < node->mNumChildren; ++i) collect(scene, node->mChildren[i], m, out);
 }
 
+// Splits the polygon with corners idx[0..n) (indices into pos, in winding order) into n - 2
+// triangles of its winding, appended to out. Why not assimp's aiProcess_Triangulate: its
+// split of concave polygons can fold them (an L-shaped hexagon came out as four triangles
+// over an area of 4 instead of 3, one facing back).
+// Ear clipping (Meisters 1975) in the plane that drops the largest axis of the polygon's
+// Newell normal: a corner b between a and c is an ear when a -> b -> c turns the polygon's
+// way and no reflex corner lies in or on the triangle abc (only reflex corners can). The
+// search starts at corner 1 and goes on from the corner after each ear, so a convex polygon
+// comes out as the fan from corner 0 (as assimp split convex quads; its split of larger
+// polygons differed) and a concave quad along the diagonal from its reflex corner (as assimp
+// split it). A polygon without an ear (self-
+// intersecting, or degenerate in that plane) loses a corner that turns its way, else any:
+// n - 2 triangles always, which the caller checks like any others.
+void triangulate_polygon(const aiVector3D* pos, const unsigned* idx, unsigned n, std::vector<std::array<unsigned, 3>>& out) {
+  if (n < 3) return;
+  // Newell's normal, in double (the corners' floats subtract exactly).
+  double normal[3] = {0, 0, 0};
+  for (unsigned i = 0; i < n; ++i) {
+    const aiVector3D& p = pos[idx[i]];
+    const aiVector3D& q = pos[idx[(i + 1) % n]];
+    normal[0] += (static_cast<double>(p.y) - q.y) * (static_cast<double>(p.z) + q.z);
+    normal[1] += (static_cast<double>(p.z) - q.z) * (static_cast<double>(p.x) + q.x);
+    normal[2] += (static_cast<double>(p.x) - q.x) * (static_cast<double>(p.y) + q.y);
+  }
+  int axis = 0;
+  for (int k = 1; k < 3; ++k)
+    if (std::abs(normal[k]) > std::abs(normal[axis])) axis = k;
+  // The other two axes in cyclic order: the projected polygon turns counter-clockwise where
+  // the normal's component along `axis` is positive.
+  const int ua = (axis + 1) % 3, va = (axis + 2) % 3;
+  const double turn = normal[axis] < 0 ? -1.0 : 1.0;
+  std::vector<double> u(n), v(n);
+  for (unsigned i = 0; i < n; ++i) {
+    u[i] = pos[idx[i]][static_cast<unsigned>(ua)];
+    v[i] = pos[idx[i]][static_cast<unsigned>(va)];
+  }
+  // > 0 where a -> b -> c turns the polygon's way.
+  const auto orient = [&](unsigned a, unsigned b, unsigned c) { return turn * ((u[b] - u[a]) * (v[c] - v[a]) - (v[b] - v[a]) * (u[c] - u[a])); };
+  std::vector<unsigned> prev(n), next(n);
+  for (unsigned i = 0; i < n; ++i) prev[i] = (i + n - 1) % n, next[i] = (i + 1) % n;
+  const auto reflex = [&](unsigned b) { return !(orient(prev[b], b, next[b]) > 0); };
+  std::vector<unsigned> reflexes;
+  for (unsigned i = 0; i < n; ++i)
+    if (reflex(i)) reflexes.push_back(i);
+  std::vector<char> removed(n, 0);
+  const auto is_ear = [&](unsigned b) {
+    const unsigned a = prev[b], c = next[b];
+    if (!(orient(a, b, c) > 0)) return false;
+    for (const unsigned r : reflexes) {
+      if (removed[r] || r == a || r == b || r == c) continue;
+      if (orient(a, b, r) >= 0 && orient(b, c, r) >= 0 && orient(c, a, r) >= 0) return false;
+    }
+    return true;
+  };
+  unsigned cursor = 1, left = n;
+  while (left > 3) {
+    unsigned ear = cursor;
+    bool found = false;
+    for (unsigned k = 0, b = cursor; k < left; ++k, b = next[b])
+      if (is_ear(b)) {
+        ear = b, found = true;
+        break;
+      }
+    if (!found)
+      for (unsigned k = 0, b = cursor; k < left; ++k, b = next[b])
+        if (orient(prev[b], b, next[b]) > 0) {
+          ear = b;
+          break;
+        }
+    const unsigned a = prev[ear], c = next[ear];
+    out.push_back({idx[a], idx[ear], idx[c]});
+    next[a] = c, prev[c] = a, removed[ear] = 1, --left;
+    // a and c may have stopped being reflex; none becomes reflex by losing an ear.
+    reflexes.erase(std::remove_if(reflexes.begin(), reflexes.end(), [&](unsigned r) { return removed[r] || ((r == a || r == c) && !reflex(r)); }),
+                   reflexes.end());
+    cursor = c;
+  }
+  out.push_back({idx[prev[cursor]], idx[cursor], idx[next[cursor]]});
+}
+
 }  // namespace
 
 Mesh read_mesh(const fs::path& path, MeshReadReport* report) {
@@ -572,6 +729,7 @@ Mesh read_mesh(const fs::path& path, MeshReadReport* report) {
   const std::string obj_text = obj ? file_text(path, name) : std::string();
   const ObjScan obj_scan = obj ? check_obj_lines(obj_text, name) : ObjScan();
   if (lower_ext(path) == ".ply") check_ply(file_text(path, name), name);
+  if (lower_ext(path) == ".gltf" || lower_ext(path) == ".glb") check_gltf(file_text(path, name), name);
   // A UTF-8 byte-order mark (some Windows tools write one) hides the OBJ's first line from
   // assimp, which then reports an index out of range: such a file is read from memory, past
   // the mark (its material library, which meso does not use, is then not looked for).
@@ -580,14 +738,14 @@ Mesh read_mesh(const fs::path& path, MeshReadReport* report) {
   // Coordinates are the file's own: a COLLADA up_axis is not turned into a rotation, so a
   // .dae base mesh and an .obj high mesh of one asset stay aligned.
   importer.SetPropertyBool(AI_CONFIG_IMPORT_COLLADA_IGNORE_UP_DIRECTION, true);
-  // Triangulate polygons in place; keep everything else as the file has it (no welding by
-  // assimp, which would also merge corners we want to keep, no reordering).
+  // Keep everything as the file has it (no welding by assimp, which would also merge corners
+  // we want to keep, no reordering); polygons are split below (triangulate_polygon).
   const aiScene* scene = nullptr;
   std::string err, validation_cause, repair;
   {
     const AssimpLog log;
     try {
-      const unsigned flags = aiProcess_Triangulate | aiProcess_ValidateDataStructure;
+      const unsigned flags = aiProcess_ValidateDataStructure;
       scene = bom ? importer.ReadFileFromMemory(obj_text.data() + 3, obj_text.size() - 3, flags, "obj") : importer.ReadFile(name, flags);
     } catch (const std::exception& e) {  // aiAssertViolation's, if assimp lets it through
       err = e.what();
@@ -626,6 +784,10 @@ Mesh read_mesh(const fs::path& path, MeshReadReport* report) {
     const aiMesh* am = inst.mesh;
     names.push_back(inst.name);
     aiMatrix3x3 normal_matrix(inst.transform);
+    // A mirroring transform (negative determinant: a node scaled by -1 along an axis) turns
+    // the winding: its triangles are turned back, so that they face outwards as the file's
+    // did (and agree with its normals, which the inverse transpose carries over).
+    const bool mirrored = normal_matrix.Determinant() < 0;
     normal_matrix.Inverse().Transpose();
     std::vector<VertexHandle> local(am->mNumVertices);
     std::vector<Vec3f> local_pos(am->mNumVertices);
@@ -651,39 +813,47 @@ Mesh read_mesh(const fs::path& path, MeshReadReport* report) {
           normal_sum[static_cast<size_t>(it->second)] += OpenMesh::Vec3d(n.x, n.y, n.z).normalize_cond();
       }
     }
-    for (unsigned fi = 0; fi < am->mNumFaces; ++fi) {
-      const aiFace& af = am->mFaces[fi];
-      if (af.mNumIndices != 3) continue;  // points and lines carry no surface
-      unsigned idx[3] = {af.mIndices[0], af.mIndices[1], af.mIndices[2]};
-      std::vector<VertexHandle> vs = {local[idx[0]], local[idx[1]], local[idx[2]]};
-      FaceHandle f;
-      if (vs[0] != vs[1] && vs[1] != vs[2] && vs[0] != vs[2]) f = mesh.add_face(vs);
-      if (!f.is_valid()) {
-        // Non-manifold or repeating a vertex: keep the face, in order, on its own vertices.
-        for (int k = 0; k < 3; ++k) {
-          vs[static_cast<size_t>(k)] = mesh.add_vertex(local_pos[idx[k]]);
-          normal_sum.emplace_back(0, 0, 0);
-        }
-        f = mesh.add_face(vs);
-        if (!f.is_valid()) throw InternalError(name + ": could not add isolated face " + std::to_string(fi));
-        ++rep.isolated_faces;
-      }
-      groups.push_back(static_cast<int>(g));
-      if (any_uv) {
-        for (auto h : face_halfedges(mesh, f)) {
-          const auto v = mesh.to_vertex_handle(h);
-          int k = v == vs[0] ? 0 : v == vs[1] ? 1 : 2;
-          Vec2f uv(0, 0);
-          if (am->HasTextureCoords(0)) {
-            const aiVector3D t = am->mTextureCoords[0][idx[k]];
-            uv = Vec2f(t.x, t.y);
-            if (!obj_scan.texcoords.empty()) correct(obj_scan.texcoords, {float_bits(uv[0]), float_bits(uv[1])}, uv.data());
-            if (!std::isfinite(uv[0]) || !std::isfinite(uv[1]))
-              throw InputError(name, "face " + std::to_string(mesh.n_faces() - 1) + " has a NaN or infinite texture coordinate");
+    std::vector<std::array<unsigned, 3>> triangles;  // those of the face at hand
+    for (unsigned pi = 0; pi < am->mNumFaces; ++pi) {
+      const aiFace& af = am->mFaces[pi];
+      if (af.mNumIndices < 3) continue;  // points and lines carry no surface
+      triangles.clear();
+      if (af.mNumIndices == 3)
+        triangles.push_back({af.mIndices[0], af.mIndices[1], af.mIndices[2]});
+      else
+        triangulate_polygon(am->mVertices, af.mIndices, af.mNumIndices, triangles);
+      for (auto& idx : triangles) {
+        if (mirrored) std::swap(idx[1], idx[2]);
+        std::vector<VertexHandle> vs = {local[idx[0]], local[idx[1]], local[idx[2]]};
+        FaceHandle f;
+        if (vs[0] != vs[1] && vs[1] != vs[2] && vs[0] != vs[2]) f = mesh.add_face(vs);
+        if (!f.is_valid()) {
+          // Non-manifold or repeating a vertex: keep the face, in order, on its own vertices.
+          for (int k = 0; k < 3; ++k) {
+            vs[static_cast<size_t>(k)] = mesh.add_vertex(local_pos[idx[k]]);
+            normal_sum.emplace_back(0, 0, 0);
           }
-          mesh.set_texcoord2D(h, uv);
+          f = mesh.add_face(vs);
+          if (!f.is_valid()) throw InternalError(name + ": could not add isolated face " + std::to_string(mesh.n_faces()));
+          ++rep.isolated_faces;
         }
-        if (!am->HasTextureCoords(0)) ++rep.faces_without_uv;
+        groups.push_back(static_cast<int>(g));
+        if (any_uv) {
+          for (auto h : face_halfedges(mesh, f)) {
+            const auto v = mesh.to_vertex_handle(h);
+            int k = v == vs[0] ? 0 : v == vs[1] ? 1 : 2;
+            Vec2f uv(0, 0);
+            if (am->HasTextureCoords(0)) {
+              const aiVector3D t = am->mTextureCoords[0][idx[k]];
+              uv = Vec2f(t.x, t.y);
+              if (!obj_scan.texcoords.empty()) correct(obj_scan.texcoords, {float_bits(uv[0]), float_bits(uv[1])}, uv.data());
+              if (!std::isfinite(uv[0]) || !std::isfinite(uv[1]))
+                throw InputError(name, "face " + std::to_string(mesh.n_faces() - 1) + " has a NaN or infinite texture coordinate");
+            }
+            mesh.set_texcoord2D(h, uv);
+          }
+          if (!am->HasTextureCoords(0)) ++rep.faces_without_uv;
+        }
       }
     }
   }

@@ -410,8 +410,14 @@ TEST(MeshIo, ObjTextureCoordinatesAreCheckedNotRepaired) {
       {"vfloat.obj", "v 0 0 0\nv 1 0 -1e39\nv 1 1 0 # far\nf 1 2 3\n", "line 2: vertex coordinate '-1e39'"},
       {"vnan.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv nan nan nan\nf 1 2 3\n", "line 4: vertex coordinate 'nan'"},
       {"comma.obj", quad + "vt 0 0\nvt 0,5 0\nvt 1 1\nf 1/1 2/2 3/3\n", "line 6: texture coordinate '0,5'"},
-      {"range.obj", quad + "vt 0 0\nvt 1 0\nvt 1 1\nf 1/1 2/2 3/3\nf 1/1 3/3 4/9/1\n",
-       "line 9: face corner '4/9/1' names texture coordinate 9, but the file has 3"},
+      {"range.obj", quad + "vt 0 0\nvt 1 0\nvt 1 1\nf 1/1 2/2 3/3\nf 1/1 3/3 4/9\n",
+       "line 9: face corner '4/9' names texture coordinate 9, but the file has 3"},
+      // Corners of mixed forms: assimp gave each corner after a bare one the next corner's
+      // texture coordinate (or normal).
+      {"mixvt.obj", quad + "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nf 1/1 2 3/3 4/4\n",
+       "line 9: 3 of the face's 4 corners name a texture coordinate (v/vt), the others none"},
+      {"mixvn.obj", quad + "vt 0 0\nvt 1 0\nvt 1 1\nvn 0 0 1\nvn 0 1 0\nf 1/1/1 2/2 3/3/2\n",
+       "line 10: 2 of the face's 3 corners name a normal (v/vt/vn or v//vn), the others none"},
       {"zero.obj", quad + "vt 0 0\nvt 1 0\nvt 1 1\nf 1/0 2/2 3/3\n", "line 8: face corner '1/0'"},
       {"back.obj", quad + "vt 0 0\nf 1/-1 2/-2 3/-1\n", "line 6: face corner '2/-2' names texture coordinate -2, but the file has 1 before it"},
       // A file cut inside its last face: assimp had read it without that face, exit 0.
@@ -695,6 +701,169 @@ TEST(MeshIo, ReadsColladaInItsOwnCoordinates) {
   const Box3 b = bounding_box(m);
   EXPECT_EQ(b.lo, Vec3f(0, 0, 5));
   EXPECT_EQ(b.hi, Vec3f(1, 1, 5));
+}
+
+// assimp's PLY reader never returned from a header without end_header (every command hung).
+TEST(MeshIo, PlyWithoutTheEndOfItsHeaderIsRefused) {
+  test::TempDir dir;
+  test::write_text(dir / "h.ply", "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\n");
+  try {
+    read_mesh(dir / "h.ply");
+    ADD_FAILURE() << "must be refused";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find((dir / "h.ply").string() + ": its header has no end_header line"), std::string::npos) << e.what();
+  }
+}
+
+// A node that mirrors (a negative scale) turns the winding: meso turns the triangles back,
+// so the mirrored cube still faces outwards, and its faces agree with the file's normals
+// (carried over by the inverse transpose). Before, it came in inside out.
+TEST(MeshIo, MirroringNodesKeepTheFacesOutwards) {
+  test::TempDir dir;
+  write_mesh(test::make_seamed_cube(), dir / "cube.gltf");
+  auto doc = nlohmann::json::parse(test::read_text(dir / "cube.gltf"));
+  for (const auto& scale : {std::vector<double>{1, 1, 1}, {-1, 1, 1}, {-1, -1, -1}, {-1, -2, 1}, {1, 3, -0.5}}) {
+    doc["nodes"] = {{{"name", "n"}, {"scale", scale}, {"mesh", 0}}};
+    test::write_text(dir / "m.gltf", doc.dump());
+    Mesh m = read_mesh(dir / "m.gltf");
+    ASSERT_EQ(m.n_faces(), 12u);
+    const Box3 b = bounding_box(m);
+    const Vec3f centre = (b.lo + b.hi) * 0.5f;
+    m.request_face_normals();
+    m.update_face_normals();
+    for (auto f : m.faces()) {
+      Vec3f c(0, 0, 0);
+      for (auto v : m.fv_range(f)) c += m.point(v) / 3.0f;
+      EXPECT_GT(OpenMesh::dot(m.normal(f), c - centre), 0.0f) << "scale " << scale[0] << " " << scale[1] << " " << scale[2];
+      for (auto v : m.fv_range(f)) EXPECT_GT(OpenMesh::dot(m.normal(f), m.normal(v)), 0.0f) << "the file's normals";
+    }
+  }
+}
+
+double triangle_area_z(const Mesh& m, FaceHandle f) {  // signed, seen from +z
+  std::vector<Vec3f> p;
+  for (auto v : m.fv_range(f)) p.push_back(m.point(v));
+  return 0.5 * ((static_cast<double>(p[1][0]) - p[0][0]) * (static_cast<double>(p[2][1]) - p[0][1]) -
+                (static_cast<double>(p[1][1]) - p[0][1]) * (static_cast<double>(p[2][0]) - p[0][0]));
+}
+
+// Polygons are split into triangles of their own winding that cover them once. assimp's
+// split folded the L-shaped hexagon (four triangles over an area of 4, one facing back); 200
+// random star-shaped polygons check the ear clipping that replaced it: every triangle faces
+// +z and the areas sum to the polygon's (shoelace). A convex polygon is the fan from its
+// first corner.
+TEST(MeshIo, PolygonsAreSplitIntoTrianglesThatCoverThemOnce) {
+  test::TempDir dir;
+  test::write_text(dir / "l.obj", "v 0 0 0\nv 2 0 0\nv 2 1 0\nv 1 1 0\nv 1 2 0\nv 0 2 0\nf 1 2 3 4 5 6\n");
+  test::write_text(dir / "l.ply", "ply\nformat ascii 1.0\nelement vertex 6\nproperty float x\nproperty float y\nproperty float z\n"
+                                  "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                                  "0 0 0\n2 0 0\n2 1 0\n1 1 0\n1 2 0\n0 2 0\n6 0 1 2 3 4 5\n");
+  for (const char* file : {"l.obj", "l.ply"}) {
+    const Mesh m = read_mesh(dir / file);
+    ASSERT_EQ(m.n_faces(), 4u) << file;
+    double area = 0;
+    for (auto f : m.faces()) {
+      EXPECT_GT(triangle_area_z(m, f), 0.0) << file;
+      area += triangle_area_z(m, f);
+    }
+    EXPECT_EQ(area, 3.0) << file;
+  }
+  // Star-shaped polygons of 4 to 9 corners at random radii, polygon k in the plane z = k:
+  // corner i at an angle within 0.45 steps of i steps of 2 pi / n, so that no two corners are
+  // half a turn apart or more (the polygon is simple: it sees the origin).
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> radius(0.1, 1.0), jitter(-0.45, 0.45);
+  std::string obj;
+  std::vector<double> areas;
+  int first = 1;
+  for (int k = 0; k < 200; ++k) {
+    const int n = 4 + k % 6;
+    std::vector<double> angles;
+    for (int i = 0; i < n; ++i) angles.push_back(2 * M_PI * (i + jitter(rng)) / n);
+    // Float coordinates, so that the shoelace below sees what the file holds. (Kept as floats:
+    // GCC 12.2 at -O2 dropped the rounding of static_cast<float> values packed into a pair of
+    // doubles.)
+    std::vector<std::array<float, 2>> p;
+    for (const double a : angles) {
+      const double r = radius(rng);
+      p.push_back({static_cast<float>(r * std::cos(a)), static_cast<float>(r * std::sin(a))});
+    }
+    double area = 0;
+    for (int i = 0; i < n; ++i) {
+      const auto& [x0, y0] = p[static_cast<size_t>(i)];
+      const auto& [x1, y1] = p[static_cast<size_t>((i + 1) % n)];
+      area += 0.5 * (static_cast<double>(x0) * y1 - static_cast<double>(x1) * y0);
+    }
+    areas.push_back(area);
+    char line[96];
+    for (const auto& [x, y] : p) {
+      std::snprintf(line, sizeof line, "v %.9g %.9g %d\n", static_cast<double>(x), static_cast<double>(y), k);
+      obj += line;
+    }
+    obj += "f";
+    for (int i = 0; i < n; ++i) obj += " " + std::to_string(first + i);
+    obj += "\n";
+    first += n;
+  }
+  // A convex pentagon last: the fan from its first corner.
+  obj += "v 0 0 500\nv 1 0 500\nv 1.5 1 500\nv 0.5 1.8 500\nv -0.5 1 500\nf " + std::to_string(first) + " " + std::to_string(first + 1) + " " +
+         std::to_string(first + 2) + " " + std::to_string(first + 3) + " " + std::to_string(first + 4) + "\n";
+  test::write_text(dir / "stars.obj", obj);
+  const Mesh m = read_mesh(dir / "stars.obj");
+  std::vector<double> sum(areas.size(), 0.0);
+  size_t backwards = 0;
+  for (auto f : m.faces()) {
+    const double a = triangle_area_z(m, f);
+    backwards += a < 0;
+    const auto z = static_cast<size_t>(m.point(m.to_vertex_handle(m.halfedge_handle(f)))[2]);
+    if (z < sum.size()) sum[z] += a;
+  }
+  EXPECT_EQ(backwards, 0u);
+  for (size_t k = 0; k < areas.size(); ++k) EXPECT_NEAR(sum[k], areas[k], 1e-6 * std::abs(areas[k])) << "polygon " << k;
+  // The pentagon's three faces are the last, in fan order: (0, 1, 2), (0, 2, 3), (0, 3, 4).
+  std::vector<std::vector<float>> xs;
+  for (auto f : m.faces()) {
+    std::vector<float> x;
+    for (auto v : m.fv_range(f)) x.push_back(m.point(v)[0]);
+    std::rotate(x.begin(), std::min_element(x.begin(), x.end()), x.end());
+    xs.push_back(x);
+  }
+  ASSERT_GE(xs.size(), 3u);
+  EXPECT_EQ(xs[xs.size() - 3], (std::vector<float>{0.0f, 1.0f, 1.5f}));
+  EXPECT_EQ(xs[xs.size() - 2], (std::vector<float>{0.0f, 1.5f, 0.5f}));
+  EXPECT_EQ(xs[xs.size() - 1], (std::vector<float>{-0.5f, 0.0f, 0.5f}));
+}
+
+// What assimp's glTF reader would misread is refused, naming the cause: a required extension
+// it does not implement, normalised-integer texture coordinates. Extensions of materials pass.
+TEST(MeshIo, GltfItCannotReadRightIsRefused) {
+  test::TempDir dir;
+  write_mesh(test::make_seamed_cube(), dir / "cube.gltf");
+  const auto base = nlohmann::json::parse(test::read_text(dir / "cube.gltf"));
+  auto doc = base;
+  doc["extensionsUsed"] = {"EXT_meshopt_compression"};
+  doc["extensionsRequired"] = {"EXT_meshopt_compression"};
+  test::write_text(dir / "meshopt.gltf", doc.dump());
+  doc = base;
+  const size_t uv = doc["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"].get<size_t>();
+  doc["accessors"][uv]["componentType"] = 5121;
+  doc["accessors"][uv]["normalized"] = true;
+  test::write_text(dir / "u8.gltf", doc.dump());
+  for (const auto& [file, message] : std::vector<std::pair<std::string, std::string>>{
+           {"meshopt.gltf", "requires the glTF extension EXT_meshopt_compression, which meso cannot read"},
+           {"u8.gltf", "mesh 0 stores TEXCOORD_0 as unsigned bytes, which meso's glTF reader (assimp 5.2) misreads"}}) {
+    try {
+      read_mesh(dir / file);
+      ADD_FAILURE() << file << " must be refused";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find((dir / file).string() + ": " + message), std::string::npos) << e.what();
+    }
+  }
+  doc = base;
+  doc["extensionsUsed"] = {"KHR_materials_emissive_strength"};
+  doc["extensionsRequired"] = {"KHR_materials_emissive_strength"};
+  test::write_text(dir / "material.gltf", doc.dump());
+  EXPECT_EQ(read_mesh(dir / "material.gltf").n_faces(), 12u);
 }
 
 TEST(MeshIo, ReadsOff) {
