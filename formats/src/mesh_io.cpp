@@ -229,6 +229,9 @@ bool read_both(const char* t, const char* end, float& read, float& exact) {
 }
 
 ObjScan check_obj_lines(const std::string& text, const std::string& name) {
+  // A binary file named .obj: assimp's OBJ reader skips what it cannot parse and said only
+  // "Ignoring empty face".
+  if (std::memchr(text.data(), '\0', text.size())) throw InputError(name, "is not a text file (an OBJ is text), so not an OBJ mesh");
   const auto blank = [](char c) { return c == ' ' || c == '\t' || c == '\r'; };
   ObjScan scan;
   std::vector<uint64_t> right_positions, right_texcoords;  // keys assimp read right (settle())
@@ -512,8 +515,16 @@ void check_gltf(const std::string& text, const std::string& name) {
     if (length > text.size() - 20) return;
     json = std::string_view(text.data() + 20, length);
   }
-  const nlohmann::json doc = nlohmann::json::parse(json.begin(), json.end(), nullptr, false);
-  if (doc.is_discarded() || !doc.is_object()) return;
+  nlohmann::json doc;
+  try {
+    doc = nlohmann::json::parse(json.begin(), json.end());
+  } catch (const nlohmann::json::parse_error& e) {
+    // (assimp said "No suitable reader found for the file format".)
+    std::string why = e.what();  // "[json.exception.parse_error.101] parse error at line 1, ..."
+    if (const size_t cut = why.find("] "); cut != std::string::npos) why.erase(0, cut + 2);
+    throw InputError(name, "its glTF JSON does not parse (" + why + ")");
+  }
+  if (!doc.is_object()) throw InputError(name, "its glTF JSON is not an object");
   if (const auto it = doc.find("extensionsRequired"); it != doc.end() && it->is_array())
     for (const auto& e : *it) {
       if (!e.is_string()) continue;

@@ -288,6 +288,19 @@ TEST(MeshIo, GarbageIsAnInputError) {
   EXPECT_THROW(read_mesh(dir / "garbage.ply"), InputError);
   test::write_text(dir / "empty.obj", "# nothing\n");
   EXPECT_THROW(read_mesh(dir / "empty.obj"), InputError);
+  // Each named for what it is (assimp had said "Ignoring empty face" and "No suitable reader
+  // found for the file format").
+  test::write_text(dir / "junk.obj", std::string("v 0 0 0\n\0\x7f\x45\x4c\x46", 13));
+  test::write_text(dir / "cut.gltf", R"({"asset": {"version": "2.0"}, "meshes": [)");
+  for (const auto& [file, message] : std::vector<std::pair<std::string, std::string>>{
+           {"junk.obj", "is not a text file (an OBJ is text)"}, {"cut.gltf", "its glTF JSON does not parse (parse error at line 1, column 42"}}) {
+    try {
+      read_mesh(dir / file);
+      ADD_FAILURE() << file << " must be refused";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find((dir / file).string() + ": " + message), std::string::npos) << e.what();
+    }
+  }
 }
 
 // A PLY cut short after three of its nine vertices trips one of assimp's own assertions,
