@@ -23,8 +23,10 @@ namespace {
 // Every listed path of the live OutputSets, for the signal handler: fixed tables of atomic
 // pointers, files and folders apart (a set lists its temporaries and new folders while it
 // may still remove them, and clears their slots before freeing the strings). More outputs at
-// once than slots go unlisted: an interrupt may then leave them.
-constexpr int kSlots = 256;
+// once than slots would go unlisted, and an interrupt would leave them: the tables hold the
+// most any command makes (`preview --turntable` up to 3600 frames; with 256 slots an
+// interrupted 3600-frame turntable had left 115 temporaries), 64 kB each.
+constexpr int kSlots = 8192;
 std::atomic<const char*> g_files[kSlots];
 std::atomic<const char*> g_folders[kSlots];
 
@@ -84,9 +86,7 @@ fs::path OutputSet::add(const fs::path& final_path) {
   if (!final_path.has_filename()) throw UsageError(final_path.string() + ": names a folder (a trailing /), not an output file");
   // Two outputs of one run under one name: the second would silently replace the first.
   const fs::path same = fs::weakly_canonical(fs::absolute(final_path, ec), ec);
-  for (const auto& e : entries_)
-    if (fs::weakly_canonical(fs::absolute(e.final, ec), ec) == same)
-      throw UsageError(final_path.string() + ": named for two outputs of this run");
+  if (canonical_finals_.count(same)) throw UsageError(final_path.string() + ": named for two outputs of this run");
   const fs::path parent = final_path.has_parent_path() ? final_path.parent_path() : fs::path(".");
   for (fs::path p = parent; !p.empty(); p = p.parent_path()) {
     if (fs::exists(p, ec) && !fs::is_directory(p, ec)) throw UsageError(p.string() + ": is a file, not a folder");
@@ -112,6 +112,7 @@ fs::path OutputSet::add(const fs::path& final_path) {
   ::close(fd);
   fs::remove(temp, ec);
   entries_.push_back({temp, final_path, std::make_unique<Listed>(temp, false)});
+  canonical_finals_.insert(same);
   return temp;
 }
 
