@@ -60,6 +60,24 @@ void example(const std::string& args) {
 
 size_t lines(const std::string& s) { return static_cast<size_t>(std::count(s.begin(), s.end(), '\n')); }
 
+// Without an EGL that offers a surfaceless display, headless preview says what is missing
+// (exit 4); libepoxy had aborted the process. --list-methods --json prints one JSON value.
+TEST(CliPreview, NoEglIsAnEnvironmentErrorAndTheMethodListIsJson) {
+  test::TempDir dir;
+  write_mesh(test::make_grid(2, 2), dir / "grid.obj");
+  const std::string grid = (dir / "grid.obj").string();
+  ASSERT_EQ(run("bake --low " + grid + " --high " + grid + " -o " + (dir / "maps").string() + " --size 16").code, 0);
+  const Result r = run_env("__EGL_VENDOR_LIBRARY_FILENAMES=" + (dir / "none.json").string() + " ",
+                           "preview " + grid + " --maps " + (dir / "maps").string() + " --method pom --headless --size 8x8 --png " +
+                               (dir / "o.png").string());
+  EXPECT_EQ(r.code, 4) << r.err;
+  EXPECT_NE(r.err.find("EGL: no surfaceless platform"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "o.png"));
+  const Result list = run("preview --list-methods --json");
+  ASSERT_EQ(list.code, 0);
+  EXPECT_EQ(nlohmann::json::parse(list.out)["methods"].size(), 17u) << list.out;
+}
+
 TEST(Cli, HelpVersionAndMethodList) {
   const Result help = run("--help");
   EXPECT_EQ(help.code, 0);
@@ -263,6 +281,17 @@ TEST(Cli, AnOutputOverItsOwnInputIsRefused) {
   EXPECT_EQ(test::read_text(dir / "grid.obj"), grid_before);
   EXPECT_EQ(read_image(dir / "h.exr").pixels, h.pixels);
   EXPECT_FALSE(fs::exists(dir / "r.obj"));
+  // preview's frame over a stream it could read (it had replaced pyramid.exr with the frame).
+  ASSERT_EQ(run("bake --low " + grid + " --high " + grid + " -o " + (dir / "maps").string() + " --size 16").code, 0);
+  const std::string displacement = (dir / "maps" / "displacement.exr").string(), pyramid = (dir / "maps" / "pyramid.exr").string();
+  ASSERT_EQ(run("streams pyramid " + displacement + " -o " + pyramid).code, 0);
+  const auto pyramid_before = test::read_text(dir / "maps" / "pyramid.exr");
+  for (const std::string& extra : {std::string(" --headless --method pyramid"), std::string(" --compare --method pyramid")}) {
+    const Result r = run("preview " + grid + " --maps " + (dir / "maps").string() + extra + " --size 8x8 --png " + pyramid);
+    EXPECT_EQ(r.code, 2) << extra << "\n" << r.err;
+    EXPECT_NE(r.err.find("is also the input"), std::string::npos) << r.err;
+  }
+  EXPECT_EQ(test::read_text(dir / "maps" / "pyramid.exr"), pyramid_before);
 }
 
 // Numbers beyond int are out of range, said as such (CLI11 had said "Could not convert", and
@@ -1816,6 +1845,17 @@ TEST(CliPreview, CompareTracesAMeshBeyondEmbreesRangeAndBoundsTheCamera) {
                           (dir / "w.png").string() + " --size 32768x1");
   EXPECT_EQ(wide.code, 2) << wide.err;
   EXPECT_NE(wide.err.find("pixels per side"), std::string::npos) << wide.err;
+  // --compare says so before its reference (it had taken 46 s at 16385 x 16), a size beyond
+  // the machine's memory is refused up front (32768² had asked for 32 GB), and a window
+  // beyond 16384 is refused before any window is made (32768² aborted inside libxcb).
+  for (const char* size : {"16385x16", "32768x32768"}) {
+    const Result c = run("preview " + obj + " --maps " + (dir / "maps").string() + " --compare --method pom --size " + size);
+    EXPECT_EQ(c.code, 2) << size << "\n" << c.err;
+    EXPECT_EQ(lines(c.err), 1u) << c.err;
+  }
+  const Result window = run("preview " + obj + " --maps " + (dir / "maps").string() + " --method pom --size 20000x20000");
+  EXPECT_EQ(window.code, 2) << window.err;
+  EXPECT_NE(window.err.find("a preview window is at most 16384 pixels per side"), std::string::npos) << window.err;
   for (const char* option : {"--pan 1e20,0", "--zoom 1e39", "--azimuth 1e39", "--light-azimuth 1e39"})
     EXPECT_EQ(run("preview " + obj + " --maps " + (dir / "maps").string() + " --compare --method pom --size 8x8 " + option).code, 2) << option;
 }

@@ -203,7 +203,9 @@ void add_preview(CLI::App& app, Context& ctx) {
     const bool method_given = method_option->count() > 0;
     ctx.run = [&ctx, args, method_given](nlohmann::json& report, Progress&) {
       if (args->list) {
-        for (const auto& m : preview_methods()) std::cout << m << '\n';
+        // With --json the report alone (its "methods"), so that stdout stays one JSON value.
+        if (!ctx.globals.json)
+          for (const auto& m : preview_methods()) std::cout << m << '\n';
         report = {{"command", "preview"}, {"methods", preview_methods()}};
         return 0;
       }
@@ -251,7 +253,20 @@ void add_preview(CLI::App& app, Context& ctx) {
       if (!has_surface_area(base)) throw InputError(args->base, "has no surface area (its faces are all degenerate): nothing to draw");
       const std::filesystem::path dir(args->maps);
       PreviewMaps maps;
-      refuse_overwriting_input(args->png, {args->base, (dir / "displacement.exr").string(), (dir / "normal_ts.png").string()});
+      const std::filesystem::path streams_dir(args->streams.empty() ? args->maps : args->streams);
+      {
+        // The frame may not replace any file this run could read (a --png named after a
+        // stream had replaced pyramid.exr with the frame).
+        std::vector<std::string> inputs = {args->base, (dir / "displacement.exr").string(), (dir / "normal_ts.png").string()};
+        for (const std::string& method : preview_methods())
+          if (!required_stream(method).empty()) inputs.push_back((streams_dir / required_stream(method)).string());
+        refuse_overwriting_input(args->png, inputs);
+      }
+      if (args->compare) {
+        // Measured (one method, the demo's bricks): 4096² took 1.48 GB more than 1024²: about
+        // 94 bytes per pixel (the reference's images and the GPU's frames).
+        refuse_beyond_memory("preview --compare at --size " + args->size, 94.0 * o.width * o.height);
+      }
       maps.displacement = read_image(dir / "displacement.exr");
       if (maps.displacement.channels > 1) {
         // Channel 0 is the height, as for the streams (a G of 1e20 had set the height range
@@ -271,7 +286,6 @@ void add_preview(CLI::App& app, Context& ctx) {
       if (maps.normal_ts.channels < 3) throw InputError((dir / "normal_ts.png").string(), "needs 3 channels (a tangent-space normal map)");
       // Streams: those the method needs must be there; in a window, any that are there are
       // loaded so that every method can be switched to.
-      const std::filesystem::path streams_dir(args->streams.empty() ? args->maps : args->streams);
       for (const std::string& method : preview_methods()) {
         const std::string stream = required_stream(method);
         if (stream.empty()) continue;

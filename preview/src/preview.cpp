@@ -37,6 +37,11 @@ bool streams_available(const PreviewMaps& maps, const std::string& method) { ret
 class EglContext {
  public:
   EglContext() {
+    // Without an EGL vendor that offers platform displays (no Mesa EGL installed), libepoxy
+    // aborts the process on the call below: asked first.
+    if (!epoxy_has_egl_extension(EGL_NO_DISPLAY, "EGL_EXT_platform_base") ||
+        !epoxy_has_egl_extension(EGL_NO_DISPLAY, "EGL_MESA_platform_surfaceless"))
+      throw InternalError("EGL: no surfaceless platform (is Mesa's libegl-mesa0 installed?)");
     display_ = eglGetPlatformDisplayEXT(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
     if (display_ == EGL_NO_DISPLAY) throw InternalError("EGL: no surfaceless display (is Mesa's libegl-mesa0 installed?)");
     EGLint major = 0, minor = 0;
@@ -69,20 +74,24 @@ class EglContext {
   EGLContext context_ = EGL_NO_CONTEXT;
 };
 
+// The driver's limits (llvmpipe: 16384 per side) are a usage error, said as such, not an
+// incomplete framebuffer. Needs a current context.
+void check_render_size(int w, int h) {
+  GLint max_size = 0, max_dims[2] = {0, 0};
+  glGetIntegerv(GL_MAX_RENDERBUFFER_SIZE, &max_size);
+  glGetIntegerv(GL_MAX_VIEWPORT_DIMS, max_dims);
+  const int limit = std::min({max_size, max_dims[0], max_dims[1]});
+  if (limit > 0 && (w > limit || h > limit))
+    throw UsageError("--size " + std::to_string(w) + "x" + std::to_string(h) + ": this OpenGL renders at most " + std::to_string(limit) +
+                     " pixels per side");
+}
+
 // Float colour targets with depth, bound while alive: attachment 0 RGBA (the image),
 // attachment 1 RG (the fetch counts, surface.frag's out_fetches).
 class OffscreenTarget {
  public:
   OffscreenTarget(int w, int h) : width_(w), height_(h) {
-    // The driver's limits (llvmpipe: 16384 per side) are a usage error, said as such, not an
-    // incomplete framebuffer.
-    GLint max_size = 0, max_dims[2] = {0, 0};
-    glGetIntegerv(GL_MAX_RENDERBUFFER_SIZE, &max_size);
-    glGetIntegerv(GL_MAX_VIEWPORT_DIMS, max_dims);
-    const int limit = std::min({max_size, max_dims[0], max_dims[1]});
-    if (limit > 0 && (w > limit || h > limit))
-      throw UsageError("--size " + std::to_string(w) + "x" + std::to_string(h) + ": this OpenGL renders at most " + std::to_string(limit) +
-                       " pixels per side");
+    check_render_size(w, h);
     glGenFramebuffers(1, &fbo_);
     glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
     glGenRenderbuffers(3, rb_);
@@ -172,6 +181,11 @@ HeadlessPreview::HeadlessPreview(const Mesh& base, const PreviewMaps& maps) : im
 
 HeadlessPreview::~HeadlessPreview() = default;
 
+void HeadlessPreview::check_size(int width, int height) {
+  impl_->context.make_current();
+  check_render_size(width, height);
+}
+
 Image HeadlessPreview::render(const PreviewOptions& o, Image* fetches) {
   impl_->draw(o);
   glFinish();
@@ -235,6 +249,12 @@ struct WindowState {
 
 WindowRun run_window(const Mesh& base, const PreviewMaps& maps, const PreviewOptions& initial, int frames) {
   check_maps(maps, initial.method);
+  // Larger windows are no use on any screen, and one of 32768 x 32768 aborted inside libxcb
+  // (on Xvfb) before a GL limit could be asked.
+  constexpr int kMaxWindowSize = 16384;
+  if (initial.width > kMaxWindowSize || initial.height > kMaxWindowSize)
+    throw UsageError("--size " + std::to_string(initial.width) + "x" + std::to_string(initial.height) + ": a preview window is at most " +
+                     std::to_string(kMaxWindowSize) + " pixels per side (render larger frames with --headless)");
   if (!glfwInit()) throw InternalError("no display for a preview window (use --headless --png FILE)");
   struct Terminate {
     ~Terminate() { glfwTerminate(); }

@@ -192,6 +192,10 @@ class HeadlessPreview {
   // Throws UsageError for an unknown method or one whose stream is not in the maps.
   Image render(const PreviewOptions& options, Image* fetches = nullptr);
 
+  // Throws UsageError when this OpenGL cannot render frames of this size (before any other
+  // work that would be lost).
+  void check_size(int width, int height);
+
   // Wall time of one draw of `options` (clear, draw, glFinish) measured on the CPU clock, in
   // milliseconds: the median of `repetitions` draws after one unmeasured warm-up draw (Mesa
   // compiles shader variants on first use).
