@@ -78,6 +78,33 @@ TEST(CliPreview, NoEglIsAnEnvironmentErrorAndTheMethodListIsJson) {
   EXPECT_EQ(nlohmann::json::parse(list.out)["methods"].size(), 17u) << list.out;
 }
 
+// vdm on a flat map sees the plane (through the table, all its pixels had been wrong here),
+// and a table whose relief is not the maps' on this mesh (made without --mesh) is warned
+// about.
+TEST(CliPreview, VdmSeesAFlatMapAndWarnsOfAnotherRelief) {
+  test::TempDir dir;
+  write_mesh(test::make_grid(2, 2), dir / "grid.obj");
+  write_mesh(test::make_plane(0.3f, 0.0f, 0.05f), dir / "tilt.obj");
+  const std::string grid = (dir / "grid.obj").string(), maps = (dir / "maps").string(), tilted = (dir / "tilted").string();
+  // 128 texels (at 16 the table's error stayed within the hit tolerance).
+  ASSERT_EQ(run("bake --low " + grid + " --high " + grid + " -o " + maps + " --size 128").code, 0);
+  // Without --mesh (relief 0.1).
+  ASSERT_EQ(run("streams vdm " + maps + "/displacement.exr --theta 4 --phi 8 -o " + maps + "/vdm.exr").code, 0);
+  const Result flat = run("preview " + grid + " --maps " + maps + " --compare --json --method vdm --size 24x24 --view-angle 60");
+  ASSERT_EQ(flat.code, 0) << flat.err;
+  const auto report = nlohmann::json::parse(flat.out);
+  EXPECT_GT(report["methods"][0]["pixels"].get<double>(), 0) << flat.out;
+  EXPECT_EQ(report["methods"][0]["wrong_hit_fraction"].get<double>(), 0.0) << flat.out;
+  EXPECT_EQ(flat.err.find("made for a relief"), std::string::npos) << "no relief to mismatch on a flat map";
+  ASSERT_EQ(run("bake --low " + grid + " --high " + (dir / "tilt.obj").string() + " -o " + tilted + " --size 16").code, 0);
+  ASSERT_EQ(run("streams vdm " + tilted + "/displacement.exr --theta 4 --phi 8 -o " + tilted + "/vdm.exr").code, 0);  // relief 0.1
+  const Result other = run("preview " + grid + " --maps " + tilted + " --compare --method vdm --size 8x8");
+  EXPECT_EQ(other.code, 0) << other.err;
+  EXPECT_NE(other.err.find("vdm.exr: made for a relief of 0.1 units of u, but its height range on this mesh is "), std::string::npos) << other.err;
+  ASSERT_EQ(run("streams vdm " + tilted + "/displacement.exr --mesh " + grid + " --theta 4 --phi 8 -o " + tilted + "/vdm.exr").code, 0);
+  EXPECT_EQ(run("preview " + grid + " --maps " + tilted + " --compare --method vdm --size 8x8").err.find("made for a relief"), std::string::npos);
+}
+
 TEST(Cli, HelpVersionAndMethodList) {
   const Result help = run("--help");
   EXPECT_EQ(help.code, 0);

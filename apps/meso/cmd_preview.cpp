@@ -310,6 +310,8 @@ void add_preview(CLI::App& app, Context& ctx) {
           clear_stream(maps, method);
         }
       }
+      if (!maps.vdm_weights.empty())
+        if (const std::string w = vdm_relief_mismatch(maps.vdm_weights, base, (streams_dir / "vdm.exr").string()); !w.empty()) warn(ctx.globals, w);
       if (args->compare) {
         compare(ctx, *args, base, maps, o, all ? std::vector<std::string>{} : wanted, base_report, report);
         return 0;

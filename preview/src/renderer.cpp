@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <initializer_list>
@@ -157,6 +158,19 @@ void check_vdm_matches(const Image& weights, const Image& basis, const Image& di
       static_cast<size_t>(basis.height) != static_cast<size_t>(theta) * static_cast<size_t>(phi) * curvatures)
     throw InputError(name, "its parts' sizes do not match its rank and direction sampling");
   check_height_range(weights, displacement, name, producer);
+}
+
+std::string vdm_relief_mismatch(const Image& weights, const Mesh& base, const std::string& name) {
+  const float relief = stream_number(weights, "relief", name, "meso streams vdm");
+  const float scale = stream_number(weights, "height_scale", name, "meso streams vdm");
+  const double per_u = object_length_per_uv(base);
+  if (!(per_u > 0) || !(scale > 0)) return "";
+  const double expected = std::max(1e-6, scale / per_u);  // as streams vdm --mesh
+  if (std::abs(relief / expected - 1.0) <= 0.01) return "";
+  char text[256];
+  std::snprintf(text, sizeof text, "%s: made for a relief of %.4g units of u, but its height range on this mesh is %.4g (make it with --mesh)",
+                name.c_str(), static_cast<double>(relief), expected);
+  return text;
 }
 
 std::string required_stream(const std::string& method) {
