@@ -1887,6 +1887,37 @@ TEST(CliPreview, CompareTracesAMeshBeyondEmbreesRangeAndBoundsTheCamera) {
     EXPECT_EQ(run("preview " + obj + " --maps " + (dir / "maps").string() + " --compare --method pom --size 8x8 " + option).code, 2) << option;
 }
 
+// Off a clamped map (UVs beyond [0, 1]) the surface goes on, clamp-to-edge, as the reference
+// and the linear searches read it; cone, relaxed-cone and pyramid now follow it as sphere
+// tracing does (they had stopped at the map's border: every pixel of a quad mapped to UVs
+// 1..2 was wrong). The map: a tilted plane baked onto a unit quad. (Its relief, up to 0.4 on
+// a quad 1 across, puts much of the image where the reference's surface, which ends at the
+// quad, and the per-pixel methods' clamped one differ: every method, sphere tracing too,
+// has the same wrong hits there.)
+TEST(CliPreview, SafeMethodsFollowAClampedMapBeyondItsBorder) {
+  test::TempDir d;
+  const std::string quad = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvn 0 0 1\nf 1/1/1 2/2/1 3/3/1\nf 1/1/1 3/3/1 4/4/1\n";
+  test::write_text(d / "q0.obj", "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n" + quad);
+  test::write_text(d / "q.obj", "vt 1 1\nvt 2 1\nvt 2 2\nvt 1 2\n" + quad);
+  test::write_text(d / "tilt.obj", "v -0.5 -0.5 0.55\nv 1.5 -0.5 -0.05\nv 1.5 1.5 -0.05\nv -0.5 1.5 0.55\nf 1 2 3\nf 1 3 4\n");
+  const std::string maps = (d / "maps").string(), displacement = (d / "maps" / "displacement.exr").string();
+  ASSERT_EQ(run("bake --low " + (d / "q0.obj").string() + " --high " + (d / "tilt.obj").string() + " -o " + maps + " --size 64 --front 1 --back 1").code, 0);
+  for (const char* stream : {"cone", "relaxed-cone", "pyramid", "sdf"})
+    ASSERT_EQ(run(std::string("streams ") + stream + " " + displacement + " -o " + maps + "/" + stream + ".exr").code, 0) << stream;
+  // 64 iterations: off the map a relaxed ray walks the texels (about 9 fetches each).
+  const Result r = run("preview " + (d / "q.obj").string() + " --maps " + maps +
+                       " --compare --json --method sphere-tracing,cone,relaxed-cone,pyramid --size 48x36 --view-angle 60 --iterations 64");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto report = nlohmann::json::parse(r.out);
+  ASSERT_EQ(report["methods"].size(), 4u);
+  const double traced = report["methods"][0]["wrong_hit_fraction"].get<double>();
+  EXPECT_LT(traced, 0.5) << r.out;
+  for (const auto& m : report["methods"]) {
+    EXPECT_GT(m["pixels"].get<double>(), 100) << r.out;
+    EXPECT_LE(m["wrong_hit_fraction"].get<double>(), traced + 0.01) << m["name"] << "\n" << r.out;
+  }
+}
+
 // A displacement map whose finite heights span more than a float (-3e38 to 3e38) cannot be
 // normalised: the streams refused it and so does the previewer, before any rendering.
 TEST(CliPreview, DisplacementBeyondTheFloatSpanIsRefused) {

@@ -20,7 +20,16 @@ vec3 cone_texel(ivec2 p) {
 // footprint.glsl): a step goes as far as the whole arc stays inside the cone (the first root
 // of a quadratic, exact for either sign of the curvature), so the method stays safe. A ray
 // that climbs back out of the height volume without a hit sets `escaped` (a silhouette), as
-// does one that leaves a clamped map (which returns the point where it left).
+// does, with silhouettes on, one that leaves a clamped map (which returns the point where it
+// left: the surface's footprint ends there).
+// Without silhouettes a clamped map's surface goes on beyond the map, its border texels'
+// heights repeated outwards (clamp-to-edge, as the reference and the linear searches read
+// it). A conservative cone stays safe there: S(y) = S(clamp(y)) and clamping to the map is
+// non-expansive, so for a point x off the map the cone of the texel under clamp(x), with its
+// apex moved to x, holds no surface either. A relaxed cone's single crossing is not known off
+// the map: its steps stop at the map's edge, and off the map the ray walks the texels (cells
+// past the border, whose heights grid_height clamps), intersecting each exactly. Before, such
+// rays stopped at the border: a quad mapped to UVs 1..2 had every pixel wrong.
 float cone_trace(vec3 dir, bool relaxed, float bend, out bool escaped) {
   escaped = false;
   if (!(u_stream_scale > 0.0) || !ray_enters(dir, bend, u_stream_bias + u_stream_scale)) {
@@ -39,8 +48,9 @@ float cone_trace(vec3 dir, bool relaxed, float bend, out bool escaped) {
   float t_floor = ray_end(o, d, e, escapes);  // z = 0, below every point of the surface (or the escape)
   float t = 0.0;
   float t_out = kConeFar;  // clamp: where the ray leaves [0, W] x [0, H]
-  bool clamped = u_stream_wrap == 0;
-  if (clamped) {
+  bool clamped = u_stream_wrap == 0 && u_silhouettes != 0;  // the surface ends at the map's edge
+  bool extended = u_stream_wrap == 0 && u_silhouettes == 0;  // it goes on beyond (clamp-to-edge)
+  if (u_stream_wrap == 0) {
     // The cones know nothing beyond the map: start where the ray comes over it (the top
     // entry point may lie outside) and stop where it leaves it, keeping that point.
     float t_in = 0.0;
@@ -53,11 +63,11 @@ float cone_trace(vec3 dir, bool relaxed, float bend, out bool escaped) {
         t_out = -1.0;
       }
     }
-    if (t_in > min(t_out, t_floor)) {  // never over the map above the floor
+    if (clamped && t_in > min(t_out, t_floor)) {  // never over the map above the floor
       escaped = true;
       return s_top;
     }
-    t = t_in;
+    if (clamped) t = t_in;
   }
   ivec2 cell = grid_cell(o.xy + t * d.xy, d.xy);
   if (clamped) cell = clamp(cell, ivec2(0), size - 1);
@@ -68,7 +78,8 @@ float cone_trace(vec3 dir, bool relaxed, float bend, out bool escaped) {
     }
     vec3 p = o + t * d;
     p.z += e * t * t;
-    vec3 c = cone_texel(cell);
+    bool off = extended && (any(lessThan(cell, ivec2(0))) || any(greaterThanEqual(cell, size)));
+    vec3 c = off && relaxed ? vec3(0.0, 0.0, 2.0) : cone_texel(cell);  // off the map a relaxed ray walks (an apex above 1: no step)
     float ratio = c.g * n.x, apex = c.b;  // ratio in texels per unit height
     float tx = d.x > 0.0 ? (float(cell.x + 1) - o.x) / d.x : (d.x < 0.0 ? (float(cell.x) - o.x) / d.x : kConeFar);
     float ty = d.y > 0.0 ? (float(cell.y + 1) - o.y) / d.y : (d.y < 0.0 ? (float(cell.y) - o.y) / d.y : kConeFar);
@@ -86,6 +97,7 @@ float cone_trace(vec3 dir, bool relaxed, float bend, out bool escaped) {
       // arc's steps end where it stops descending, and a rising ray walks the texels exactly.
       if (relaxed && e > 0.0) step = slope < 0.0 ? min(step, slope / (-2.0 * e)) : 0.0;
     }
+    if (relaxed && extended) step = min(step, max(t_out - t, 0.0));  // a relaxed step ends at the map's edge
     if (t + step < t_exit || t_exit <= t) {
       // The cone does not reach beyond the footprint: intersect S over it exactly.
       float t_hit;
@@ -104,7 +116,7 @@ float cone_trace(vec3 dir, bool relaxed, float bend, out bool escaped) {
       if (ty <= t_exit) cell.y += d.y > 0.0 ? 1 : -1;
       continue;
     }
-    float tq = min(t + step, min(t_floor, t_out));
+    float tq = min(t + step, min(t_floor, clamped ? t_out : kConeFar));
     vec3 q = o + tq * d;
     q.z += e * tq * tq;
     if (relaxed && grid_surface(q.xy) >= q.z) {
@@ -125,7 +137,7 @@ float cone_trace(vec3 dir, bool relaxed, float bend, out bool escaped) {
       escaped = true;
       break;
     }
-    if (tq >= t_out) {  // left the map (clamp)
+    if (clamped && tq >= t_out) {  // left the map (clamp, silhouettes)
       escaped = true;
       break;
     }

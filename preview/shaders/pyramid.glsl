@@ -22,8 +22,8 @@ vec2 pyramid_cell_exits(vec2 lo, vec2 size, vec3 o, vec3 d) {
 // Bent rays (bend != 0, footprint.glsl): a box is skipped when the arc's lowest point over it
 // is above the box (the ends, or the vertex of a convex arc between them), and the descent to
 // a box's top is the arc's first reach of it: still exact. A ray that climbs back out of the
-// height volume without a hit sets `escaped` (a silhouette), as does one that leaves a
-// clamped map (which returns the point where it left).
+// height volume without a hit sets `escaped` (a silhouette), as does, with silhouettes on,
+// one that leaves a clamped map (which returns the point where it left).
 float pyramid_trace(vec3 dir, float bend, out bool escaped) {
   escaped = false;
   if (!(u_stream_scale > 0.0) || !ray_enters(dir, bend, u_stream_bias + u_stream_scale)) {
@@ -40,9 +40,13 @@ float pyramid_trace(vec3 dir, float bend, out bool escaped) {
   float t_end = ray_end(o, d, e, escapes);  // z = 0: below every point of the surface (or the escape)
   float t_stop = t_end;                     // t_end, or where the ray leaves a clamped map
   float t = 0.0;
-  if (u_stream_wrap == 0) {
-    // Clamp: the pyramid knows nothing beyond the map; start where the ray comes over it and
-    // stop where it leaves it, keeping that point (as cone stepping does).
+  if (u_stream_wrap == 0 && u_silhouettes != 0) {
+    // Clamp with silhouettes: the surface's footprint is the map; start where the ray comes
+    // over it and stop where it leaves it, keeping that point (as cone stepping does).
+    // Without silhouettes the clamped surface goes on beyond the map (clamp-to-edge), and the
+    // walk goes on over it: a cell off the map is bounded by the box of the level's border
+    // cell it clamps to (its texels' surface holds every height the extension repeats), and
+    // at level 0 intersected exactly (footprint_hit clamps the heights it reads).
     float t_in = 0.0, t_out = kConeFar;
     for (int k = 0; k < 2; ++k) {
       if (d[k] != 0.0) {

@@ -153,11 +153,12 @@ void main() {
   }
 
   // A safe method's ray that left the surface: climbed back out over a convex base, or left
-  // a clamped map's footprint (silhouettes). The cones and the pyramid know nothing beyond a
-  // clamped map and return the point where the ray left it, on the border, which the rule
+  // a clamped map's footprint (silhouettes). With silhouettes the cones and the pyramid stop
+  // where the ray leaves a clamped map and return that point, on the border, which the rule
   // below would keep; the linear searches go on over the clamped surface to a point off the
   // map, which it discards: so both discard such rays, straight or bent. (Sphere tracing's
-  // field covers the clamped surface, and its point off the map is discarded below.)
+  // field covers the clamped surface, and its point off the map is discarded below; without
+  // silhouettes every method follows the clamped surface beyond the map.)
   if (escaped && u_silhouettes != 0) discard;
 
   // Silhouettes at the map's border: a visible point outside [0, 1]^2 of a map that does not
