@@ -1,4 +1,5 @@
 #include "meso/bake/displacement_stream.hpp"
+#include "meso/core/float_rounding.hpp"
 
 #include "meso/core/error.hpp"
 #include "ray_scene.hpp"
@@ -185,7 +186,7 @@ uint32_t quantise(float v, float lo, float hi) {
   return static_cast<uint32_t>(std::clamp(q, 0.0, static_cast<double>(kDisplacementSteps)));
 }
 float dequantise(uint32_t q, float lo, float hi) {
-  return static_cast<float>(lo + (static_cast<double>(hi) - lo) * q / kDisplacementSteps);
+  return round_to_float(lo + (static_cast<double>(hi) - lo) * q / kDisplacementSteps);  // (see float_rounding.hpp)
 }
 }  // namespace
 

@@ -2,6 +2,7 @@
 // triangles' hits: the same triangle, distance and barycentrics (over the triangle's stored
 // corners) as a brute-force intersection of every triangle, in double precision.
 #include "ray_scene.hpp"
+#include "meso/core/float_rounding.hpp"
 
 #include "meso/examples/brick_wall.hpp"
 #include "meso/examples/parametric.hpp"
@@ -69,8 +70,8 @@ void expect_triangle_hits(const Mesh& mesh, unsigned seed, bool paired = true) {
       while (d.squaredNorm() > 1 || d.squaredNorm() < 1e-4);
     }
     d.normalize();
-    const Vec3f of(static_cast<float>(o.x()), static_cast<float>(o.y()), static_cast<float>(o.z()));
-    const Vec3f df(static_cast<float>(d.x()), static_cast<float>(d.y()), static_cast<float>(d.z()));
+    const Vec3f of(round_to_float(o.x()), round_to_float(o.y()), round_to_float(o.z()));  // (float_rounding.hpp)
+    const Vec3f df(round_to_float(d.x()), round_to_float(d.y()), round_to_float(d.z()));
     // The brute force sees the ray as Embree does: float origin and direction.
     const Eigen::Vector3d od(of[0], of[1], of[2]), dd(df[0], df[1], df[2]);
     const float tfar = static_cast<float>(2 * diag);

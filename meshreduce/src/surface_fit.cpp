@@ -1,4 +1,5 @@
 #include "surface_fit.hpp"
+#include "meso/core/float_rounding.hpp"
 
 #include "closest_triangles.hpp"
 
@@ -350,7 +351,7 @@ SurfaceFitReport fit_to_surface(Mesh& mesh, const SurfaceFitTarget& target, cons
         const double length = move.norm(), reach = 0.999 * options.tether;
         if (length > reach) goal = original[i] + move * (reach / length);
       }
-      next[i] = point(Vec3f(static_cast<float>(goal[0]), static_cast<float>(goal[1]), static_cast<float>(goal[2])));
+      next[i] = point(Vec3f(round_to_float(goal[0]), round_to_float(goal[1]), round_to_float(goal[2])));  // (float_rounding.hpp)
     }
     // A face must also keep facing the input where it lies, as the bench counts flips: its
     // normal against that of the input triangle nearest its centroid (unless it faced away
