@@ -19,29 +19,9 @@
 #include <emmintrin.h>
 #endif
 
-#include "cone_map_search.hpp"
-
-// This file is compiled twice: on its own for baseline x86-64 (SSE2), and again, included by
-// cone_map_avx2.cpp with MESO_CONE_MAP_AVX2 defined, as code for CPUs with AVX2, BMI1/2 and
-// LZCNT; build_cone_map (below) takes that path where the CPU has them. Encoded with VEX
-// (three operands, no register copies) and vectorised in wider registers where GCC can, the
-// search runs 10-12 % fewer instructions (docs/benchmarks.md). Both paths give the same
-// bytes: the same IEEE operations in the same order (the target leaves out FMA, so nothing
-// is contracted into it, and GCC does not reorder floating-point arithmetic without
-// -ffast-math); ConeMap.Avx2PathGivesTheSameBytes checks it. The pragma comes after every
-// #include, so what the headers define (the standard library, TBB, meso's core) stays
-// baseline code in both objects, where the linker may keep either copy of an inline
-// function; only this file's own functions, local to each object or named apart
-// (build_cone_map_avx2), carry AVX2.
-#if defined(MESO_CONE_MAP_AVX2)
-#pragma GCC target("avx2,bmi,bmi2,lzcnt,popcnt")
-#endif
-
 namespace meso {
 
-#if !defined(MESO_CONE_MAP_AVX2)
 const char* cone_kind_name(ConeKind k) { return k == ConeKind::relaxed ? "relaxed" : "conservative"; }
-#endif
 
 namespace {
 
@@ -2041,6 +2021,8 @@ class BlockSearch {
   std::vector<std::pair<double, uint32_t>> queue_;  // relaxed: a max-heap of (key, index in stack_)
 };
 
+}  // namespace
+
 // A seed for the next block, once: neighbouring texels often share their steepest point.
 void add_seed(std::vector<ConeSearch::Point>& seeds, const ConeSearch::Point& p) {
   if (!p.valid) return;
@@ -2049,13 +2031,7 @@ void add_seed(std::vector<ConeSearch::Point>& seeds, const ConeSearch::Point& p)
   seeds.push_back(p);
 }
 
-}  // namespace
-
-#if defined(MESO_CONE_MAP_AVX2)
-Image detail::build_cone_map_avx2(const HeightField& input, const ConeMapOptions& o, Progress& progress) {
-#else
-Image detail::build_cone_map_baseline(const HeightField& input, const ConeMapOptions& o, Progress& progress) {
-#endif
+Image build_cone_map(const HeightField& input, const ConeMapOptions& o, Progress& progress) {
   // With half output the cones are those of the heights as stored (rounded to half); a copy
   // only then (the map's size again in working memory otherwise).
   HeightField rounded;
@@ -2195,27 +2171,6 @@ Image detail::build_cone_map_baseline(const HeightField& input, const ConeMapOpt
   return out;
 }
 
-#if !defined(MESO_CONE_MAP_AVX2)
-bool detail::cone_map_uses_avx2() {
-#if MESO_CONE_MAP_HAS_AVX2
-  static const bool has = [] {
-    __builtin_cpu_init();
-    return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("bmi") && __builtin_cpu_supports("bmi2") &&
-           __builtin_cpu_supports("lzcnt") && __builtin_cpu_supports("popcnt");
-  }();
-  return has;
-#else
-  return false;
-#endif
-}
-
-Image build_cone_map(const HeightField& input, const ConeMapOptions& o, Progress& progress) {
-#if MESO_CONE_MAP_HAS_AVX2
-  if (detail::cone_map_uses_avx2()) return detail::build_cone_map_avx2(input, o, progress);
-#endif
-  return detail::build_cone_map_baseline(input, o, progress);
-}
-
 std::vector<Image> cone_map_levels(Image level0) {
   std::vector<Image> levels;
   levels.push_back(std::move(level0));
@@ -2315,7 +2270,5 @@ HeightHit trace_cone_map(const HeightField& field, const Image& cone, ConeKind k
   }
   return out;
 }
-
-#endif  // !MESO_CONE_MAP_AVX2
 
 }  // namespace meso

@@ -1,6 +1,5 @@
 #include "meso/streams/cone_map.hpp"
 
-#include "cone_map_search.hpp"
 #include "test_fields.hpp"
 
 #include <gtest/gtest.h>
@@ -8,7 +7,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <functional>
 #include <random>
 
@@ -231,31 +229,6 @@ TEST(ConeMap, SameBytesWhateverTheThreadCount) {
   }
   const Image many = build_cone_map(f, {ConeKind::relaxed, 1e-4, false});
   EXPECT_EQ(one.pixels, many.pixels);
-}
-
-// The AVX2 build of the search (cone_map_avx2.cpp) and the baseline one give the same bytes,
-// so the output does not depend on the CPU: every kind, both borders, half storage, on maps
-// of every character (smooth crests, steps, noise; sizes not multiples of the 4 x 4 blocks).
-TEST(ConeMap, Avx2PathGivesTheSameBytes) {
-#if MESO_CONE_MAP_HAS_AVX2
-  if (!detail::cone_map_uses_avx2()) GTEST_SKIP() << "this CPU has no AVX2: build_cone_map runs the baseline code";
-  const std::vector<HeightField> fields = {bumps(37, 29, Border::wrap), bumps(30, 26, Border::clamp), steps(33, 21, Border::clamp),
-                                           noise(26, 35, Border::wrap, 7)};
-  for (const HeightField& f : fields)
-    for (ConeKind kind : {ConeKind::conservative, ConeKind::relaxed})
-      for (bool half : {false, true})
-        for (bool fans : {false, true}) {
-          if (fans && kind != ConeKind::relaxed) continue;
-          const ConeMapOptions o{kind, 1e-4, half, fans};
-          const Image a = detail::build_cone_map_baseline(f, o, null_progress());
-          const Image b = detail::build_cone_map_avx2(f, o, null_progress());
-          ASSERT_EQ(a.pixels.size(), b.pixels.size());
-          EXPECT_EQ(0, std::memcmp(a.pixels.data(), b.pixels.data(), a.pixels.size() * sizeof(float)))
-              << f.height.width << "x" << f.height.height << " " << cone_kind_name(kind) << (half ? " half" : "") << (fans ? " fans" : "");
-        }
-#else
-  GTEST_SKIP() << "built without the AVX2 search (x86-64 GCC only)";
-#endif
 }
 
 // The bar of `meso streams cone` / `relaxed-cone`: one phase, every 4 x 4 block counted once
