@@ -27,8 +27,8 @@ vec3 cone_texel(ivec2 p) {
 // it). A conservative cone stays safe there: S(y) = S(clamp(y)) and clamping to the map is
 // non-expansive, so for a point x off the map the cone of the texel under clamp(x), with its
 // apex moved to x, holds no surface either. A relaxed cone's single crossing is not known off
-// the map: its steps stop at the map's edge, and off the map the ray walks the texels (cells
-// past the border, whose heights grid_height clamps), intersecting each exactly. Before, such
+// the map: its steps stop at the map's edge, and off the map the ray is intersected exactly,
+// a row or column of cells at a time (the surface there repeats the border's). Before, such
 // rays stopped at the border: a quad mapped to UVs 1..2 had every pixel wrong.
 float cone_trace(vec3 dir, bool relaxed, float bend, out bool escaped) {
   escaped = false;
@@ -79,7 +79,54 @@ float cone_trace(vec3 dir, bool relaxed, float bend, out bool escaped) {
     vec3 p = o + t * d;
     p.z += e * t * t;
     bool off = extended && (any(lessThan(cell, ivec2(0))) || any(greaterThanEqual(cell, size)));
-    vec3 c = off && relaxed ? vec3(0.0, 0.0, 2.0) : cone_texel(cell);  // off the map a relaxed ray walks (an apex above 1: no step)
+    if (off && relaxed) {
+      // Off the map S(y) = S(clamp(y)): beside an edge it does not vary across the border, in
+      // a corner it is the corner texel's height. The ray's stretch over the cells that clamp
+      // to one border cell (to where it enters another row or column, or comes back over the
+      // map) is intersected at once: in a corner with that height, beside an edge as the ray
+      // moved onto the border cell's outer half (where S is constant across), whose z and
+      // along-edge path are the ray's.
+      ivec2 border = clamp(cell, ivec2(0), size - 1);
+      bvec2 across = bvec2(cell.x != border.x, cell.y != border.y);
+      vec2 t_axis = vec2(kConeFar);  // per axis: leaving the cell's row (column), or coming back over the map
+      for (int k = 0; k < 2; ++k) {
+        if (!across[k]) t_axis[k] = d[k] > 0.0 ? (float(cell[k] + 1) - o[k]) / d[k] : (d[k] < 0.0 ? (float(cell[k]) - o[k]) / d[k] : kConeFar);
+        else if (cell[k] < 0 && d[k] > 0.0) t_axis[k] = -o[k] / d[k];
+        else if (cell[k] >= size[k] && d[k] < 0.0) t_axis[k] = (n[k] - o[k]) / d[k];
+      }
+      float t_r = max(min(min(t_axis.x, t_axis.y), t_floor), t);
+      float t_hit;
+      bool found;
+      if (across.x && across.y) {
+        float reach = ray_first_reach(p.z - grid_height(border), d.z + 2.0 * e * t, e);
+        found = t + reach <= t_r;
+        t_hit = t + reach;
+      } else {
+        vec3 oe = o, de = d;
+        for (int k = 0; k < 2; ++k)
+          if (across[k]) {
+            oe[k] = cell[k] < 0 ? 0.25 : n[k] - 0.25;
+            de[k] = 0.0;
+          }
+        found = footprint_hit(border, oe, de, e, t, t_r, t_hit);
+      }
+      if (found) {
+        t = t_hit;
+        break;
+      }
+      if (t_r >= t_floor) {
+        t = t_floor;
+        escaped = escapes;
+        break;
+      }
+      t = t_r;
+      // The next cell, by the axes the stretch ended on (not from the position, which rounding
+      // may leave on this side of the line).
+      for (int k = 0; k < 2; ++k)
+        if (t_axis[k] <= t_r) cell[k] = across[k] ? (cell[k] < 0 ? 0 : size[k] - 1) : cell[k] + (d[k] > 0.0 ? 1 : -1);
+      continue;
+    }
+    vec3 c = cone_texel(cell);
     float ratio = c.g * n.x, apex = c.b;  // ratio in texels per unit height
     float tx = d.x > 0.0 ? (float(cell.x + 1) - o.x) / d.x : (d.x < 0.0 ? (float(cell.x) - o.x) / d.x : kConeFar);
     float ty = d.y > 0.0 ? (float(cell.y + 1) - o.y) / d.y : (d.y < 0.0 ? (float(cell.y) - o.y) / d.y : kConeFar);
