@@ -503,8 +503,9 @@ void check_ply(const std::string& text, const std::string& name) {
 // across, EXT_meshopt_compression's buffers as if plain), and positions, normals or texture
 // coordinates stored as normalised integers, which core glTF allows for texture coordinates
 // (it takes their bytes for floats: UVs of 9e-41, or NaN). Extensions of materials, textures
-// and lights leave the geometry as it is and are let through. A file that is not JSON is
-// left to assimp, which says what is wrong.
+// and lights leave the geometry as it is and are let through. JSON that does not parse is
+// refused here too, saying where (assimp said only "No suitable reader found"); a binary
+// glTF without a JSON chunk is left to assimp, which says what is wrong.
 void check_gltf(const std::string& text, const std::string& name) {
   std::string_view json = text;
   if (text.compare(0, 4, "glTF") == 0) {
@@ -665,7 +666,7 @@ void collect(const aiScene* scene, const aiNode* node, const aiMatrix4x4& parent
 // n - 2 triangles always, which the caller checks like any others.
 void triangulate_polygon(const aiVector3D* pos, const unsigned* idx, unsigned n, std::vector<std::array<unsigned, 3>>& out) {
   if (n < 3) return;
-  // Newell's normal, in double (the corners' floats subtract exactly).
+  // Newell's normal (in double).
   double normal[3] = {0, 0, 0};
   for (unsigned i = 0; i < n; ++i) {
     const aiVector3D& p = pos[idx[i]];
