@@ -11,7 +11,6 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <initializer_list>
@@ -167,10 +166,10 @@ std::string vdm_relief_mismatch(const Image& weights, const Mesh& base, const st
   if (!(per_u > 0) || !(scale > 0)) return "";
   const double expected = std::max(1e-6, scale / per_u);  // as streams vdm --mesh
   if (std::abs(relief / expected - 1.0) <= 0.01) return "";
-  char text[256];
-  std::snprintf(text, sizeof text, "%s: made for a relief of %.4g units of u, but its height range on this mesh is %.4g (make it with --mesh)",
-                name.c_str(), static_cast<double>(relief), expected);
-  return text;
+  std::ostringstream text;
+  text.precision(4);
+  text << name << ": made for a relief of " << relief << " units of u, but its height range on this mesh is " << expected << " (make it with --mesh)";
+  return text.str();
 }
 
 std::string required_stream(const std::string& method) {
