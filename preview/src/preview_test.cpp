@@ -552,7 +552,7 @@ TEST(Preview, ConeAndPyramidTracersMatchTheCpuTracers) {
 // With a budget the trace never exhausts, the budget does not matter: 256 and 4096 loop
 // passes give the same image. With a small one, relaxed cones get further (on a tiling map:
 // off a clamped one a relaxed ray crosses the border's rows one pass each, and at 70 degrees
-// 8 passes converge 0.75 of the pixels, against cone stepping's 0.87).
+// 8 passes converge 0.75 of the pixels, against cone stepping's 0.84).
 TEST(Preview, ConeSteppingDoesNotDependOnAGenerousBudget) {
   const Mesh quad = test::make_grid(1, 1);
   const PreviewMaps maps = cone_maps(ConeScene::plateau, Border::wrap);
