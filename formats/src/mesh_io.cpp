@@ -430,6 +430,12 @@ void check_ply(const std::string& text, const std::string& name) {
     }
   }
   const size_t body = text.find('\n', header_end);
+  // A face's first list is its corners: fewer than three make no surface (assimp dropped such
+  // faces, or with none said "inconsistent data"), refused as the OBJ check does.
+  const auto check_corners = [&](const Element& e, const Property& p, long long i, unsigned long long n) {
+    if (e.name != "face" || !p.list || &p != &*std::find_if(e.properties.begin(), e.properties.end(), [](const Property& q) { return q.list; })) return;
+    if (n < 3) throw InputError(name, "face " + std::to_string(i) + " has " + std::to_string(n) + " corners (a face needs at least three)");
+  };
   const auto cut_short = [&](const Element& e, long long i) {
     return InputError(name, "cut short: it ends inside " + e.name + " " + std::to_string(i) + " of the " + std::to_string(e.count) +
                                 " its header announces");
@@ -462,6 +468,7 @@ void check_ply(const std::string& text, const std::string& name) {
             n = 0;
             for (size_t k = 0; k < p.size; ++k) n = (n << 8) | static_cast<unsigned char>(text[at + (big ? k : p.size - 1 - k)]);
             at += p.size;
+            check_corners(e, p, i, n);
             if (n > (size - at) / p.item_size) throw cut_short(e, i);
             at += n * p.item_size;
           } else {
@@ -492,10 +499,16 @@ void check_ply(const std::string& text, const std::string& name) {
         if (ok && list) {
           const auto [ptr, ec] = std::from_chars(token.data(), token.data() + token.size(), n);
           ok = ec == std::errc() && ptr == token.data() + token.size() && n >= 0;
+          if (ok) check_corners(e, property, i, static_cast<unsigned long long>(n));
         }
         for (long long k = 0; ok && k < (list ? n : 0); ++k) ok = next(token);
         if (!ok) throw cut_short(e, i);
       }
+  // Data past what the header announces (a vertex count too small: assimp said
+  // "inconsistent data").
+  std::string_view extra;
+  if (next(extra))
+    throw InputError(name, "has more data than its header announces (from '" + std::string(extra.substr(0, 24)) + "' on)");
 }
 
 // What assimp 5.2's glTF 2.0 reader would read wrong without failing, refused: a required

@@ -489,6 +489,16 @@ TEST(MeshIo, AsciiPlyShortOfItsHeaderIsRefused) {
   junk.insert(junk.find("element face"), "element junk 999999999999999\n");
   test::write_text(dir / "junk.ply", junk + "0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n3 0 1 3\n");
   EXPECT_EQ(read_mesh(dir / "junk.ply").n_faces(), 3u);
+  // A face of fewer than three corners (assimp dropped it, or with none said "inconsistent
+  // data"), and more data than the header announces (a vertex count too small: the same).
+  for (const auto& [file, body, message] : std::vector<std::array<std::string, 3>>{
+           {"zero.ply", "0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n0\n3 0 2 3\n", "face 1 has 0 corners (a face needs at least three)"},
+           {"two.ply", "0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n2 0 1\n", "face 2 has 2 corners"},
+           {"more.ply", "0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n3 0 1 3\n3 1 2 3\n", "has more data than its header announces (from '3' on)"}}) {
+    test::write_text(dir / file, header + body);
+    const std::string why = refusal(dir / file);
+    EXPECT_NE(why.find((dir / file).string() + ": " + message), std::string::npos) << why;
+  }
 }
 
 // A binary PLY whose header announces more than its body can hold: assimp allocated the
@@ -517,6 +527,13 @@ TEST(MeshIo, BinaryPlyShortOfItsHeaderIsRefused) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("cut.ply: cut short: it ends inside face 7 of the 8"), std::string::npos) << e.what();
   }
+  // A binary face of two corners: its count byte 3 -> 2 (and one index fewer).
+  std::string two = test::read_text(dir / "grid.ply");
+  two.resize(two.size() - 4);
+  two[two.size() - 9] = 2;
+  test::write_text(dir / "two.ply", two);
+  const std::string why = refusal(dir / "two.ply");
+  EXPECT_NE(why.find((dir / "two.ply").string() + ": face 7 has 2 corners"), std::string::npos) << why;
 }
 
 // Files assimp reads by repairing them, saying so only in its log: a glTF face indexing past
