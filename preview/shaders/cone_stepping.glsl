@@ -79,6 +79,9 @@ float cone_trace(vec3 dir, bool relaxed, float bend, out bool escaped) {
     vec3 p = o + t * d;
     p.z += e * t * t;
     bool off = extended && (any(lessThan(cell, ivec2(0))) || any(greaterThanEqual(cell, size)));
+    // Where the ray leaves the cell's column (tx) and row (ty).
+    float tx = d.x > 0.0 ? (float(cell.x + 1) - o.x) / d.x : (d.x < 0.0 ? (float(cell.x) - o.x) / d.x : kConeFar);
+    float ty = d.y > 0.0 ? (float(cell.y + 1) - o.y) / d.y : (d.y < 0.0 ? (float(cell.y) - o.y) / d.y : kConeFar);
     if (off && relaxed) {
       // Off the map S(y) = S(clamp(y)): beside an edge it does not vary across the border, in
       // a corner it is the corner texel's height. The ray's stretch over the cells that clamp
@@ -90,7 +93,7 @@ float cone_trace(vec3 dir, bool relaxed, float bend, out bool escaped) {
       bvec2 across = bvec2(cell.x != border.x, cell.y != border.y);
       vec2 t_axis = vec2(kConeFar);  // per axis: leaving the cell's row (column), or coming back over the map
       for (int k = 0; k < 2; ++k) {
-        if (!across[k]) t_axis[k] = d[k] > 0.0 ? (float(cell[k] + 1) - o[k]) / d[k] : (d[k] < 0.0 ? (float(cell[k]) - o[k]) / d[k] : kConeFar);
+        if (!across[k]) t_axis[k] = k == 0 ? tx : ty;
         else if (cell[k] < 0 && d[k] > 0.0) t_axis[k] = -o[k] / d[k];
         else if (cell[k] >= size[k] && d[k] < 0.0) t_axis[k] = (n[k] - o[k]) / d[k];
       }
@@ -128,8 +131,6 @@ float cone_trace(vec3 dir, bool relaxed, float bend, out bool escaped) {
     }
     vec3 c = cone_texel(cell);
     float ratio = c.g * n.x, apex = c.b;  // ratio in texels per unit height
-    float tx = d.x > 0.0 ? (float(cell.x + 1) - o.x) / d.x : (d.x < 0.0 ? (float(cell.x) - o.x) / d.x : kConeFar);
-    float ty = d.y > 0.0 ? (float(cell.y + 1) - o.y) / d.y : (d.y < 0.0 ? (float(cell.y) - o.y) / d.y : kConeFar);
     float t_exit = max(min(min(tx, ty), t_floor), t);
     float step;
     if (e == 0.0) {
