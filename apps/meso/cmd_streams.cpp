@@ -270,7 +270,7 @@ void add_streams(CLI::App& app, Context& ctx) {
           if (field.scale / per_u > kVdmMaxRelief)
             throw InputError(vdm->mesh, "the map's height range is " + short_number(field.scale / per_u) +
                                             " units of u on this mesh, beyond " + short_number(kVdmMaxRelief) + " (are the map and the mesh in the same units?)");
-          o.relief = static_cast<float>(std::max(1e-6, field.scale / per_u));
+          o.relief = static_cast<float>(vdm_relief_on_mesh(field.scale, per_u));
           // A height range below 1e-6 of the mesh's length per u is flat for any table: the
           // map and the mesh are likely of different assets or units.
           if (field.scale > 0 && field.scale / per_u < 1e-6)

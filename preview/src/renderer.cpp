@@ -6,6 +6,7 @@
 #include "meso/core/mesh_arrays.hpp"
 #include "meso/formats/image_io.hpp"
 #include "meso/streams/pyramid.hpp"
+#include "meso/streams/vdm.hpp"
 #include "sampling.hpp"
 
 #include <algorithm>
@@ -164,7 +165,7 @@ std::string vdm_relief_mismatch(const Image& weights, const Mesh& base, const st
   const float scale = stream_number(weights, "height_scale", name, "meso streams vdm");
   const double per_u = object_length_per_uv(base);
   if (!(per_u > 0) || !(scale > 0)) return "";
-  const double expected = std::max(1e-6, scale / per_u);  // as streams vdm --mesh
+  const double expected = vdm_relief_on_mesh(scale, per_u);
   if (std::abs(relief / expected - 1.0) <= 0.01) return "";
   std::ostringstream text;
   text.precision(4);

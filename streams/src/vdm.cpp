@@ -205,6 +205,8 @@ std::vector<Image> vdm_images(const CompressedVdm& c, const HeightField& field, 
 
 namespace meso {
 
+double vdm_relief_on_mesh(double height_scale, double length_per_u) { return std::max(1e-6, height_scale / length_per_u); }
+
 std::vector<float> vdm_curvature_slices(const std::vector<float>& k1, const std::vector<float>& k2, double length_per_u, int steps) {
   if (k1.empty() || k2.empty()) return {0.0f};
   // Nearest-rank percentile of a copy.

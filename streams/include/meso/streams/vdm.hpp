@@ -59,6 +59,12 @@ VdmTable build_vdm(const HeightField& field, const VdmOptions& options, Progress
 // to the same float are kept once. Deterministic.
 std::vector<float> vdm_curvature_slices(const std::vector<float>& k1, const std::vector<float>& k2, double length_per_u, int steps);
 
+// The relief (VdmOptions::relief, units of u) of a map whose height range is `height_scale`
+// object units on a base mesh of `length_per_u` object units per unit of u (object_length_per_uv),
+// at least 1e-6: a flatter table is flat for every view. What `meso streams vdm --mesh` uses,
+// and what the previewer expects of a table for that mesh.
+double vdm_relief_on_mesh(double height_scale, double length_per_u);
+
 // Truncated PCA of the table seen as a texels x directions matrix D: D ~ m + W B^T, m the
 // column means, B (directions x rank) the covariance's leading eigenvectors, W = (D - m) B.
 // The rank is the smallest whose RMS error over all entries (misses counted as kVdmMiss) is
