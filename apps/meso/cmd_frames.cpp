@@ -69,7 +69,7 @@ void add_frames(CLI::App& app, Context& ctx) {
       }
       const nlohmann::json k_min = k_lo <= k_hi ? nlohmann::json(k_lo) : nlohmann::json(nullptr);
       const nlohmann::json k_max = k_lo <= k_hi ? nlohmann::json(k_hi) : nlohmann::json(nullptr);
-      if (unfit) warn(ctx.globals, args->input + ": " + std::to_string(unfit) + " vertices have too few neighbours for a curvature fit (set to 0)");
+      if (unfit) warn(ctx.globals, args->input + ": " + std::to_string(unfit) + " vertices have no curvature fit (set to 0): their neighbourhoods up to the 3-ring do not determine one (too few neighbours, or all on a line or in two rows)");
       size_t mirrored = 0;
       for (auto h : mesh.halfedges())
         if (!mesh.is_boundary(h) && frames[static_cast<size_t>(h.idx())].sign < 0) ++mirrored;

@@ -13,34 +13,84 @@ namespace {
 
 using Vec3d = OpenMesh::Vec3d;
 
+// The least-squares fit of h = a' u'^2 + b' u' v' + c' v'^2 + d' u' + e' v' (+ f v'^3 + g v'^4
+// with `long_axis_terms`) in whitened coordinates (u', v') = W (u, v), v' along the long axis;
+// coefficients a..e back in (u, v). False when the points do not determine it.
+bool solve_whitened(const std::vector<Eigen::Vector3d>& uvh, const Eigen::Matrix2d& W, bool long_axis_terms,
+                    Eigen::Matrix<double, 5, 1>& coef) {
+  const Eigen::Index rows = static_cast<Eigen::Index>(uvh.size()), cols = long_axis_terms ? 7 : 5;
+  if (rows < cols) return false;
+  Eigen::MatrixXd A(rows, cols);
+  Eigen::VectorXd h(rows);
+  for (Eigen::Index i = 0; i < rows; ++i) {
+    const auto& p = uvh[static_cast<size_t>(i)];
+    const Eigen::Vector2d w = W * p.head<2>();
+    const double u = w.x(), v = w.y();
+    A(i, 0) = u * u;
+    A(i, 1) = u * v;
+    A(i, 2) = v * v;
+    A(i, 3) = u;
+    A(i, 4) = v;
+    if (long_axis_terms) {
+      A(i, 5) = v * v * v;
+      A(i, 6) = v * v * v * v;
+    }
+    h[i] = p.z();
+  }
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(A, Eigen::ComputeThinU | Eigen::ComputeThinV);
+  const auto& sv = svd.singularValues();
+  // Ill-conditioned (the neighbours in two rows through the vertex, say): the coefficients
+  // would follow rounding rather than the surface. Measured before whitening: a condition
+  // number near 1e3 let -O1 and -O2 builds differ by 8% in curvature.
+  if (!(sv[cols - 1] > 1e-2 * sv[0])) return false;
+  const Eigen::VectorXd c = svd.solve(h);
+  // Back to (u, v): h = x'^T P x' + g^T x' + ... with x' = W x, so P_uv = W^T P W and
+  // g_uv = W^T g (the long axis's cubic and quartic terms do not reach the second order).
+  Eigen::Matrix2d P;
+  P << c[0], c[1] / 2, c[1] / 2, c[2];
+  const Eigen::Matrix2d P_uv = W.transpose() * P * W;
+  const Eigen::Vector2d g_uv = W.transpose() * Eigen::Vector2d(c[3], c[4]);
+  coef << P_uv(0, 0), 2 * P_uv(0, 1), P_uv(1, 1), g_uv[0], g_uv[1];
+  return coef.allFinite();
+}
+
 // Least-squares fit of h = a u^2 + b u v + c v^2 + d u + e v (coefficients in that order);
 // false when the points do not determine it. The linear terms absorb the difference between
 // the vertex normal and the surface's normal, which otherwise biases the curvature where the
 // neighbourhood is lopsided (anisotropic meshes).
+//
+// Long thin cells. Whether the points determine the fit does not depend on how (u, v) are
+// scaled or sheared: a linear change of (u, v) maps the five monomials onto combinations of
+// themselves. So the fit runs in whitened coordinates (u', v') = W (u, v), in which the
+// points' second moments are the identity, and the conditioning test sees only what the points
+// leave undetermined (all on a line, in two rows through the vertex, ...), not the cells'
+// shape (a test on one isotropic scale had found every vertex of a cylinder with cells 8
+// times longer than wide "undetermined"). But a neighbourhood R times longer than wide sees
+// the surface's quartic term along its long axis at R^2 times the size of the quadratic
+// term across it, and least squares spreads that residual into the cross coefficients (on a
+// cylinder whose cells are 20 times wider around than along the axis: 0.71 of 1/r along the
+// flat axis). Where the neighbourhood is more than twice as long as wide, the fit therefore
+// also takes v'^3 and v'^4 along its long axis (a jet of degree 4 there, Cazals and Pouget
+// 2003), which leave the second order at the vertex alone: the same cylinder then has errors
+// of 0.0009 of 1/r. Where those terms are not determined (too few distinct positions along
+// the axis) the plain quadric is fitted.
 bool fit_quadric(const std::vector<Eigen::Vector3d>& uvh, Eigen::Matrix<double, 5, 1>& coef) {
   if (uvh.size() < 5) return false;
-  double scale = 0;
-  for (const auto& p : uvh) scale = std::max(scale, p.x() * p.x() + p.y() * p.y());
-  if (!(scale > 0)) return false;
-  const double s = std::sqrt(scale);
-  // Fit in coordinates scaled to the neighbourhood's size (u' = u/s, h' = h/s), so the
-  // conditioning test is unitless; then a = a'/s, ..., d = d'.
-  Eigen::MatrixXd A(static_cast<Eigen::Index>(uvh.size()), 5);
-  Eigen::VectorXd h(static_cast<Eigen::Index>(uvh.size()));
-  for (size_t i = 0; i < uvh.size(); ++i) {
-    const double u = uvh[i].x() / s, v = uvh[i].y() / s;
-    A.row(static_cast<Eigen::Index>(i)) << u * u, u * v, v * v, u, v;
-    h[static_cast<Eigen::Index>(i)] = uvh[i].z() / s;
-  }
-  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(A, Eigen::ComputeThinU | Eigen::ComputeThinV);
-  const auto& sv = svd.singularValues();
-  // Ill-conditioned (e.g. all neighbours near one line, or a lopsided ring on an anisotropic
-  // mesh): the coefficients would follow rounding rather than the surface. Measured: a
-  // condition number near 1e3 let -O1 and -O2 builds differ by 8% in curvature.
-  if (!(sv[4] > 1e-2 * sv[0])) return false;
-  coef = svd.solve(h);
-  coef.head<3>() /= s;
-  return coef.allFinite();
+  Eigen::Matrix2d moments = Eigen::Matrix2d::Zero();
+  for (const auto& p : uvh) moments += p.head<2>() * p.head<2>().transpose();
+  moments /= static_cast<double>(uvh.size());
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> axes(moments);  // ascending: v' is the long axis
+  const Eigen::Vector2d lambda = axes.eigenvalues();
+  // Cells more than 1000 times longer than wide (or points on one line): the thin direction's
+  // coordinates carry the positions' float rounding at 1e-4 of their size and more.
+  if (!(lambda[1] > 0) || !(lambda[0] > 1e-6 * lambda[1])) return false;
+  // W = diag(lambda)^(-1/2) Q^T.
+  const Eigen::Matrix2d W = lambda.cwiseSqrt().cwiseInverse().asDiagonal() * axes.eigenvectors().transpose();
+  // Measured on the cylinder: 1.5 and 2 give the same fits; 3 leaves cells twice as wide as
+  // long at 0.009 of 1/r instead of 0.0035.
+  const double long_axis = 2;
+  if (lambda[1] > long_axis * long_axis * lambda[0] && solve_whitened(uvh, W, true, coef)) return true;
+  return solve_whitened(uvh, W, false, coef);
 }
 
 }  // namespace
@@ -56,6 +106,10 @@ std::vector<VertexCurvature> fit_curvature(const Mesh& mesh) {
     n.normalize();
     const Vec3d t = any_perpendicular(n), b = OpenMesh::cross(n, t);
     const Vec3d p = OpenMesh::vector_cast<Vec3d>(mesh.point(v));
+    // Without a fit the directions are still a frame of the tangent plane (k1 = k2 = 0 leaves
+    // them arbitrary, but a consumer that builds a frame from d1 gets a valid one).
+    out[static_cast<size_t>(v.idx())].d1 = OpenMesh::vector_cast<Vec3f>(t);
+    out[static_cast<size_t>(v.idx())].d2 = OpenMesh::vector_cast<Vec3f>(b);
     // Gather the 1-ring, then grow ring by ring (2, then 3) while the neighbourhood does not
     // determine the fit.
     ring.clear();
@@ -107,8 +161,9 @@ std::vector<VertexCurvature> fit_curvature(const Mesh& mesh) {
     // rings cannot determine one, rather than Inf in the mesh's _CURVATURE.
     if (!std::isfinite(static_cast<float>(eig.eigenvalues()[0])) || !std::isfinite(static_cast<float>(eig.eigenvalues()[1]))) continue;
     VertexCurvature& c = out[static_cast<size_t>(v.idx())];
-    c.k1 = static_cast<float>(eig.eigenvalues()[1]);
-    c.k2 = static_cast<float>(eig.eigenvalues()[0]);
+    // + 0: a flat neighbourhood's -0 (a plane's fit gives either sign) is written as 0.
+    c.k1 = static_cast<float>(eig.eigenvalues()[1]) + 0.0f;
+    c.k2 = static_cast<float>(eig.eigenvalues()[0]) + 0.0f;
     const Eigen::Vector2d e1 = Li.transpose() * eig.eigenvectors().col(1);
     // The direction in the vertex normal's tangent plane (what the exported NORMAL and
     // TANGENT span): the in-plane part of the fitted surface's direction.

@@ -55,6 +55,38 @@ TEST(Curvature, CylinderHasOneOverRAndZeroAlongTheAxis) {
   });
 }
 
+// Long thin cells determine the fit as well as square ones: a linear change of (u, v) leaves
+// the quadric's monomials spanning the same space. A cylinder of radius 1 whose quads are
+// `aspect` times longer (along the axis) than wide; a conditioning test on one isotropic
+// scale had left every vertex unfit from aspect 8 (and below 1/8) on, with k = 0 written.
+// Cells wider than long also need the quartic term along the neighbourhood's long axis
+// (around the cylinder), or it leaks into the curvature along the flat axis.
+TEST(Curvature, StretchedCellsFitLikeSquareOnes) {
+  const double r = 1.0;
+  const int columns = 64;
+  for (double aspect : {0.05, 0.1, 0.2, 1.0, 5.0, 10.0, 20.0}) {
+    const int rows = 16;
+    const double cell = 2 * kPi * r / columns;  // the cells' width around the axis
+    const Mesh m = test::make_parametric(columns, rows, [&](double s, double t) {
+      const double ph = 2 * kPi * s;
+      return Vec3f(float(r * std::cos(ph)), float(r * std::sin(ph)), float(aspect * cell * rows * t));
+    }, true, false);
+    const auto c = fit_curvature(m);
+    size_t fitted = 0;
+    double worst = 0;
+    for_interior(m, c, [&](VertexHandle, const VertexCurvature& k) {
+      fitted += k.rings > 0;
+      worst = std::max({worst, std::abs(k.k1 - 1 / r), std::abs(double(k.k2))});
+    });
+    size_t interior = 0;
+    for (auto v : m.vertices()) interior += !m.is_boundary(v);
+    EXPECT_EQ(fitted, interior) << "aspect " << aspect;
+    // Measured: 0.0009 of 1/r (cells 20 times wider than long) to 0.0096 (20 times longer);
+    // without the long axis's quartic term 0.71 at aspect 0.05, 0.18 at 0.1, 0.044 at 0.2.
+    EXPECT_LT(worst, 0.012 / r) << "aspect " << aspect;
+  }
+}
+
 TEST(Curvature, TorusMatchesItsClosedForm) {
   // Tube radius r around a circle of radius R: k_tube = 1/r, k_ring = cos(v) / (R + r cos(v)),
   // where v = 0 on the outer equator.
@@ -161,6 +193,21 @@ TEST(Curvature, HighValenceVerticesFitTheOneRingOthersTheTwoRing) {
   EXPECT_LT(worst_other, 0.04);
 }
 
+// The rings of latitude nearest the poles of a fine UV sphere have cells far wider than tall
+// (256 x 128 segments: aspect 4-14 at polar angles 2-7 degrees).
+TEST(Curvature, FineUvSphereFitsNearItsPoles) {
+  const double r = 1.0;
+  const Mesh m = uv_sphere_with_poles(r, 256, 128);
+  const auto c = fit_curvature(m);
+  double worst = 0;
+  for (auto v : m.vertices()) {
+    const auto& k = c[static_cast<size_t>(v.idx())];
+    ASSERT_GT(k.rings, 0) << "vertex " << v.idx() << " at z = " << m.point(v)[2];
+    worst = std::max({worst, std::abs(k.k1 - 1 / r), std::abs(k.k2 - 1 / r)});
+  }
+  EXPECT_LT(worst, 0.02 / r);
+}
+
 // A patch of a sphere with a stalk: below the patch's rows, only one column of quads, `rows`
 // long. The stalk's end vertices have a 1-ring of 2 or 3 and a 2-ring of 5 or 6 vertices in
 // two columns (u^2 and u cannot be told apart: no fit); with a stalk 2 quads long their
@@ -220,6 +267,10 @@ TEST(Curvature, TooFewNeighboursGiveNoFit) {
   for (const auto& k : fit_curvature(m)) {
     EXPECT_EQ(k.rings, 0);
     EXPECT_EQ(k.k1, 0.0f);
+    // Still a frame of the tangent plane (the normal is +z here).
+    EXPECT_NEAR(k.d1.norm(), 1.0f, 1e-6f);
+    EXPECT_NEAR(k.d1[2], 0.0f, 1e-6f);
+    EXPECT_NEAR(OpenMesh::cross(k.d1, k.d2)[2], 1.0f, 1e-6f);
   }
 }
 

@@ -15,15 +15,20 @@ struct VertexCurvature {
   // from its normal (convex with outward normals): a sphere of radius r has k1 = k2 = 1/r.
   float k1 = 0, k2 = 0;
   // Unit principal directions in object space, in the vertex normal's tangent plane, d1 x d2 = n.
+  // Without a fit (rings = 0): still a frame of that plane, chosen arbitrarily; (1, 0, 0) and
+  // (0, 1, 0) only where the vertex has no normal.
   Vec3f d1{1, 0, 0}, d2{0, 1, 0};
   int rings = 0;                   // 1, 2 or 3: the neighbourhood that determined the fit; 0 = none
 };
 
 // One per vertex. Uses the 1-ring when it has at least 8 neighbours and determines the fit
-// well (singular values within a factor 100), else the 2-ring, else the 3-ring (the end of a
-// thin strip, whose 2-ring lies in two rows); a vertex whose 3-ring cannot determine it gets
-// zero curvature and rings = 0, as does one whose curvature overflows float. Needs vertex
-// normals. Curvatures
+// well (singular values within a factor 100 in coordinates whitened to the neighbourhood's
+// second moments, so long thin cells are no obstacle up to an aspect of 1000; a neighbourhood
+// more than twice as long as wide also fits cubic and quartic terms along its long axis,
+// which keep that axis's higher-order terms out of the curvature across it), else the
+// 2-ring, else the 3-ring (the end of a thin strip, whose 2-ring lies in two rows); a vertex
+// whose 3-ring cannot determine it gets zero curvature and rings = 0, as does one whose
+// curvature overflows float. Needs vertex normals. Curvatures
 // are those of the fitted surface at the vertex (shape operator I^-1 II); directions are
 // its principal directions projected onto the vertex normal's tangent plane.
 std::vector<VertexCurvature> fit_curvature(const Mesh& mesh);
