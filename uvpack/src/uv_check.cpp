@@ -11,24 +11,39 @@
 #include <stdexcept>
 #include <string>
 #include <tuple>
+#include <unordered_map>
+#include <vector>
 
 namespace meso {
 
 namespace {
 
+// The charts after the first that touch a texel (sorted, distinct), for the texels several
+// charts touch (already reported as shared).
+using MoreCharts = std::unordered_map<size_t, std::vector<int>>;
+
 // The mip-safety check of uv_check.hpp on the touched texels' charts (`touch`: the first
-// chart touching each texel, -1 for none; a texel two charts touch is already reported as
-// shared, and fails here too since its neighbours read both).
-void check_mip_levels(const std::vector<int>& touch, int size, int levels, UvCheckReport& r) {
+// chart touching each texel, -1 for none; `more`: the others). Every chart touching a texel
+// reads around it, and a texel several charts touch holds all of their values (the bake
+// writes one of them, which one depends on the face order), so the verdict does not depend
+// on the faces' order.
+void check_mip_levels(const std::vector<int>& touch, const MoreCharts& more, int size, int levels, UvCheckReport& r) {
   if (levels > 14 || size % (1 << levels) != 0)
     throw std::invalid_argument("mip_safe " + std::to_string(levels) + " needs a size that is a multiple of 2^" + std::to_string(levels));
   const size_t n = static_cast<size_t>(size) * static_cast<size_t>(size);
   std::vector<uint8_t> written(n);
   for (size_t i = 0; i < n; ++i) written[i] = touch[i] >= 0;
   const std::vector<int32_t> source = dilation_sources(written, size, size, -1);
-  std::vector<int> owner(n, -1);  // the chart whose value each texel holds after dilation
+  std::vector<int> owner(n, -1);  // the (first) chart whose value each texel holds after dilation
   for (size_t i = 0; i < n; ++i)
     if (source[i] >= 0) owner[i] = touch[static_cast<size_t>(source[i])];
+  // The other charts of the texel whose value texel i holds (touching texel: itself).
+  auto more_of = [&](const std::vector<int>& label, size_t i) -> const std::vector<int>* {
+    const size_t from = &label == &owner ? static_cast<size_t>(source[i]) : i;
+    if (label[i] < 0 || more.empty()) return nullptr;
+    const auto it = more.find(from);
+    return it == more.end() ? nullptr : &it->second;
+  };
   constexpr int kMixed = -2;
   std::map<std::tuple<int, int, int>, size_t> found;  // (level, chart, reads) -> texels
   r.mip_safe_levels = levels;
@@ -43,8 +58,8 @@ void check_mip_levels(const std::vector<int>& touch, int size, int levels, UvChe
         for (int y = cy * b; y < (cy + 1) * b; ++y)
           for (int x = cx * b; x < (cx + 1) * b; ++x) {
             const size_t i = static_cast<size_t>(y) * static_cast<size_t>(size) + static_cast<size_t>(x);
-            if (owner[i] != h) h = kMixed;
-            if (touch[i] >= 0) t = (t == -1 || t == touch[i]) ? touch[i] : kMixed;
+            if (owner[i] != h || more_of(owner, i)) h = kMixed;
+            if (touch[i] >= 0) t = (t == -1 || t == touch[i]) && !more_of(touch, i) ? touch[i] : kMixed;
           }
         holds[static_cast<size_t>(cy) * static_cast<size_t>(cn) + static_cast<size_t>(cx)] = h;
         touched[static_cast<size_t>(cy) * static_cast<size_t>(cn) + static_cast<size_t>(cx)] = t;
@@ -55,8 +70,10 @@ void check_mip_levels(const std::vector<int>& touch, int size, int levels, UvChe
       std::vector<int> cs;
       for (int y = cy * b; y < (cy + 1) * b; ++y)
         for (int x = cx * b; x < (cx + 1) * b; ++x) {
-          const int c = label[static_cast<size_t>(y) * static_cast<size_t>(size) + static_cast<size_t>(x)];
-          if (c >= 0) cs.push_back(c);
+          const size_t i = static_cast<size_t>(y) * static_cast<size_t>(size) + static_cast<size_t>(x);
+          if (label[i] < 0) continue;
+          cs.push_back(label[i]);
+          if (const auto* others = more_of(label, i)) cs.insert(cs.end(), others->begin(), others->end());
         }
       std::sort(cs.begin(), cs.end());
       cs.erase(std::unique(cs.begin(), cs.end()), cs.end());
@@ -103,6 +120,7 @@ UvCheckReport check_uv_mapping(const Mesh& mesh, const UvCheckOptions& o) {
   const size_t n = static_cast<size_t>(o.size) * static_cast<size_t>(o.size);
   std::vector<int> first_chart(n, -1);
   std::vector<uint8_t> shared(n, 0);
+  MoreCharts more_charts;
 
   auto for_each_touched = [&](FaceHandle f, auto&& fn) {
     for_each_touched_texel(uv_triangle_in_pixels(mesh, f, o.size, o.size), o.size, o.size, [&](int x, int y) {
@@ -123,9 +141,17 @@ UvCheckReport check_uv_mapping(const Mesh& mesh, const UvCheckOptions& o) {
     }
     const int c = chart[static_cast<size_t>(f.idx())];
     for_each_touched(f, [&](size_t i) {
-      if (first_chart[i] < 0) first_chart[i] = c;
-      else if (first_chart[i] != c) shared[i] = 1;
+      if (first_chart[i] < 0) {
+        first_chart[i] = c;
+      } else if (first_chart[i] != c) {
+        shared[i] = 1;
+        if (o.mip_safe >= 0) more_charts[i].push_back(c);
+      }
     });
+  }
+  for (auto& [texel, charts] : more_charts) {
+    std::sort(charts.begin(), charts.end());
+    charts.erase(std::unique(charts.begin(), charts.end()), charts.end());
   }
   for (auto f : mesh.faces()) {
     if (uv_double_area(mesh, f) == 0.0) continue;
@@ -180,7 +206,7 @@ UvCheckReport check_uv_mapping(const Mesh& mesh, const UvCheckOptions& o) {
   double all_uv_area = 0;
   for (double a : uv_area) all_uv_area += a;
   r.utilization = n ? all_uv_area / static_cast<double>(n) : 0.0;
-  if (o.mip_safe >= 0) check_mip_levels(first_chart, o.size, o.mip_safe, r);
+  if (o.mip_safe >= 0) check_mip_levels(first_chart, more_charts, o.size, o.mip_safe, r);
   return r;
 }
 

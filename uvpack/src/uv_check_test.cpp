@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <tuple>
@@ -226,6 +227,43 @@ TEST(UvCheck, MipCheckOfTwoChartsTwoTexelsApart) {
   EXPECT_EQ(touching.mip_safe_levels, -1);
   ASSERT_FALSE(touching.mip_violations.empty());
   EXPECT_EQ(touching.mip_violations.front().level, 0);
+}
+
+// A small chart inside one texel of another: both charts touch that texel, both read around
+// it, and the texel holds both (which one the bake writes depends on the face order). The
+// verdict and the violations must not depend on which chart comes first in the file (they
+// did: only the first chart touching a texel was a reader).
+TEST(UvCheck, MipCheckDoesNotDependOnTheFaceOrder) {
+  const float t = 1.0f / 64;
+  const std::array<float, 4> big = {8 * t, 1 - 16 * t, 16 * t, 1 - 8 * t};
+  const std::array<float, 4> small = {10.25f * t, 1 - 10.75f * t, 10.75f * t, 1 - 10.25f * t};
+  UvCheckOptions o;
+  o.size = 64;
+  o.overlay = false;
+  o.mip_safe = 1;
+  std::vector<std::vector<std::tuple<int, int, int, size_t>>> found;
+  for (const auto& boxes : {std::vector<std::array<float, 4>>{big, small}, std::vector<std::array<float, 4>>{small, big}}) {
+    const UvCheckReport r = check_uv_mapping(test::make_uv_quads(boxes), o);
+    ASSERT_EQ(r.charts, 2u);
+    EXPECT_EQ(r.texels_shared, 1u);
+    EXPECT_EQ(r.mip_safe_levels, -1);
+    // In chart terms (the big chart first), so both orders compare.
+    const bool big_first = boxes.front() == big;
+    std::vector<std::tuple<int, int, int, size_t>> v;
+    for (const auto& m : r.mip_violations) {
+      const int chart = big_first ? m.chart : 1 - m.chart, reads = big_first ? m.reads : 1 - m.reads;
+      v.emplace_back(m.level, chart, reads, m.texels);
+    }
+    std::sort(v.begin(), v.end());
+    found.push_back(v);
+  }
+  EXPECT_EQ(found[0], found[1]);
+  // Level 0: the small chart reads the 3 x 3 texels around its own, all the big chart's; the
+  // big chart reads the shared texel.
+  std::vector<std::tuple<int, int, int, size_t>> level0;
+  for (const auto& v : found[0])
+    if (std::get<0>(v) == 0) level0.push_back(v);
+  EXPECT_EQ(level0, (std::vector<std::tuple<int, int, int, size_t>>{{0, 0, 1, 1}, {0, 1, 0, 9}}));
 }
 
 }  // namespace

@@ -70,7 +70,9 @@ struct UvCheckReport {
 // mean of level k. A level-k texel holds chart c's values alone when all its 2^k x 2^k
 // level-0 texels do. A bilinear lookup at a point of chart c (clamp-to-edge) reads the
 // level-k texels within one (Chebyshev) of a level-k texel containing a texel c touches;
-// each of them holding any other chart's value is a violation.
+// each of them holding any other chart's value is a violation. A texel several charts touch
+// (reported as shared) counts as holding all of their values, whichever the bake writes, so
+// the verdict does not depend on the faces' order.
 // Face indices are 0-based in the mesh's face order (the input file's order). Requires UVs
 // and a compacted mesh (no deleted elements), as read_mesh() and reduce_mesh() return.
 UvCheckReport check_uv_mapping(const Mesh& mesh, const UvCheckOptions& options);
