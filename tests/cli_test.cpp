@@ -1989,6 +1989,67 @@ TEST(CliPreview, DrawsChannelZeroAndFarDisplacementsAndRefusesAFlatBase) {
   }
 }
 
+// The maps are read as their metadata says: a displacement.exr that records its mapping to
+// object units (bake's displacement.png converted to EXR) through that mapping, as `meso
+// streams` reads it (it had been drawn 1/scale times too high, and its streams refused as
+// "made from another height map"); a normal map baked with --normal-y down with its green
+// turned back (it had been drawn with green inverted). Another quantity under either name is
+// refused.
+TEST(CliPreview, MapsAreReadAsTheirMetadataSays) {
+  test::TempDir d;
+  write_mesh(test::make_grid(2, 2), d / "base.obj");
+  // Heights and greens that the mappings carry exactly (multiples of 1/64, codes k / 255).
+  Image height(8, 8, 1), normalised(8, 8, 1), up(8, 8, 3, 0.0f), down(8, 8, 3, 0.0f);
+  for (int y = 0; y < 8; ++y)
+    for (int x = 0; x < 8; ++x) {
+      const int k = (x + 2 * y) % 3;
+      height.at(x, y) = 0.25f + static_cast<float>(k) / 64.0f;
+      normalised.at(x, y) = static_cast<float>(k) / 2.0f;
+      const float g = static_cast<float>(100 + 20 * ((x + y) % 4)) / 255.0f;
+      up.at(x, y, 0) = down.at(x, y, 0) = 140.0f / 255.0f;
+      up.at(x, y, 1) = g;
+      down.at(x, y, 1) = 1.0f - g;
+      up.at(x, y, 2) = down.at(x, y, 2) = 230.0f / 255.0f;
+    }
+  normalised.metadata = {{"height_scale", 2.0f / 64.0f}, {"height_bias", 0.25f}};
+  down.metadata = {{"quantity", std::string("normal")}, {"normal_y", std::string("down")}};
+  fs::create_directories(d / "plain");
+  fs::create_directories(d / "tagged");
+  write_image(height, d / "plain" / "displacement.exr", PixelFormat::float32);
+  write_image(up, d / "plain" / "normal_ts.png", PixelFormat::uint8);
+  write_image(normalised, d / "tagged" / "displacement.exr", PixelFormat::float32);
+  write_image(down, d / "tagged" / "normal_ts.png", PixelFormat::uint8);
+  auto render = [&](const std::string& maps) {
+    const fs::path png = d / (maps + ".png");
+    const Result r = run("preview " + (d / "base.obj").string() + " --maps " + (d / maps).string() +
+                         " --method relief --headless --size 32x32 --view-angle 40 --png " + png.string());
+    EXPECT_EQ(r.code, 0) << r.err;
+    return r.code == 0 ? read_image(png) : Image();
+  };
+  const Image plain = render("plain"), tagged = render("tagged");
+  ASSERT_FALSE(plain.pixels.empty());
+  EXPECT_EQ(plain.pixels, tagged.pixels);
+  // Another meso map under either name.
+  Image cone = height, object_space = up;
+  cone.metadata = {{"quantity", std::string("cone map")}};
+  object_space.metadata = {{"quantity", std::string("normal")}, {"space", std::string("object")}};
+  fs::create_directories(d / "wrong_height");
+  fs::create_directories(d / "wrong_normals");
+  write_image(cone, d / "wrong_height" / "displacement.exr", PixelFormat::float32);
+  write_image(up, d / "wrong_height" / "normal_ts.png", PixelFormat::uint8);
+  write_image(height, d / "wrong_normals" / "displacement.exr", PixelFormat::float32);
+  write_image(object_space, d / "wrong_normals" / "normal_ts.png", PixelFormat::uint8);
+  for (const auto& [maps, message] : {std::pair<std::string, std::string>{"wrong_height", "displacement.exr: holds a cone map"},
+                                      {"wrong_normals", "normal_ts.png: is an object-space normal map"}}) {
+    const Result r = run("preview " + (d / "base.obj").string() + " --maps " + (d / maps).string() +
+                         " --method relief --headless --size 8x8 --png " + (d / "no.png").string());
+    EXPECT_EQ(r.code, 3) << maps << "\n" << r.err;
+    EXPECT_EQ(lines(r.err), 1u) << r.err;
+    EXPECT_NE(r.err.find(message), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(d / "no.png"));
+  }
+}
+
 // --shade height: object units in an EXR; in an 8-bit PNG normalised to the map's range with
 // the mapping in its metadata (the raw heights, all below 1/255 unit, had come out black).
 TEST(CliPreview, HeightShadeIsReadableInEveryFormat) {

@@ -61,6 +61,15 @@ std::string height_mapping_problem(const ImageMetadata& metadata) {
   return "";
 }
 
+Image heights_in_object_units(Image image) {
+  const float scale = metadata_number(image.metadata, "height_scale"), bias = metadata_number(image.metadata, "height_bias");
+  if (!(std::isfinite(scale) && std::isfinite(bias) && scale >= 0)) return image;
+  for (size_t i = 0; i < image.pixels.size(); i += static_cast<size_t>(image.channels)) image.pixels[i] = bias + scale * image.pixels[i];
+  image.metadata.erase("height_scale");
+  image.metadata.erase("height_bias");
+  return image;
+}
+
 HeightField make_height_field(const Image& image, Border border) {
   HeightField hf;
   hf.border = border;

@@ -48,6 +48,11 @@ HeightField make_height_field(const Image& image, Border border);
 // make_height_field would otherwise take as raw values.
 std::string height_mapping_problem(const ImageMetadata& metadata);
 
+// Channel 0 of `image` in object units: through the map's own mapping (bias + scale * value)
+// when it records a usable one, as make_height_field takes it; else as it is. The other
+// channels are left alone.
+Image heights_in_object_units(Image image);
+
 // The header attributes every stream file carries about its height field: height_scale,
 // height_bias, height_units, border (docs/formats.md).
 ImageMetadata height_field_metadata(const HeightField& field);
