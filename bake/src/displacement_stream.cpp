@@ -2,6 +2,7 @@
 #include "meso/core/float_rounding.hpp"
 
 #include "meso/core/error.hpp"
+#include "meso/core/input_file.hpp"
 #include "ray_scene.hpp"
 
 #include <tbb/blocked_range.h>
@@ -261,6 +262,7 @@ void write_displacement_stream(const EncodedStream& e, int base_vertices, int ba
 namespace meso {
 
 EncodedStream read_displacement_stream(const std::string& path, int* base_vertices, int* base_triangles) {
+  require_input_file(path, "a displacement stream");
   std::ifstream f(path, std::ios::binary);
   if (!f) throw InputError(path, "cannot be opened");
   auto u32 = [&](const char* what) {
@@ -287,6 +289,8 @@ EncodedStream read_displacement_stream(const std::string& path, int* base_vertic
   e.max_value = f32("range");
   if (!std::isfinite(e.min_value) || !std::isfinite(e.max_value) || e.max_value < e.min_value)
     throw InputError(path, "has an invalid quantisation range");
+  // A range whose span is not a float (-3e38 to 3e38) decodes to infinite displacements.
+  if (!std::isfinite(e.max_value - e.min_value)) throw InputError(path, "its quantisation range spans more than the float range");
   for (uint32_t l = 0; l < levels; ++l) {
     const uint32_t s = u32("segments"), count = u32("level size");
     if (s != (1u << l)) throw InputError(path, "level " + std::to_string(l) + " has " + std::to_string(s) + " segments; expected " + std::to_string(1u << l));
@@ -303,6 +307,9 @@ EncodedStream read_displacement_stream(const std::string& path, int* base_vertic
     e.segments.push_back(static_cast<int>(s));
     e.vertices.push_back(std::move(vertices));
   }
+  // More data than the header's levels (a level count lowered, data appended) is damage, not
+  // something to ignore: the finest level would be dropped without a word.
+  if (f.peek() != std::char_traits<char>::eof()) throw InputError(path, "has data past the end of its last level (level count " + std::to_string(levels) + ")");
   *base_vertices = static_cast<int>(nv);
   *base_triangles = static_cast<int>(nt);
   return e;

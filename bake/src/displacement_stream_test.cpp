@@ -5,6 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
+#include <sys/stat.h>
+
 #include <array>
 #include <cmath>
 #include <filesystem>
@@ -236,6 +239,38 @@ TEST(DisplacementStream, FileRoundTripAndDecodedLevelsMorphToTheCoarserOne) {
     }
   }
   EXPECT_THROW(read_displacement_stream((dir / "none.bin").string(), &nv, &nt), InputError);
+
+  // A good file with bytes appended, with its level count lowered (the finest level had been
+  // dropped without a word), or with a range whose span overflows a float (decoded to
+  // infinite displacements); and a pipe (it had blocked the reader).
+  const std::string good = test::read_text(file);
+  std::string lowered = good;
+  lowered[12] = 3;  // level count: bytes 12-15, after the magic and the version
+  std::string wide = good;
+  const float lo = -3e38f, hi = 3e38f;
+  std::memcpy(&wide[24], &lo, 4);  // the range: after the level, vertex and triangle counts
+  std::memcpy(&wide[28], &hi, 4);
+  for (const auto& [bytes, what] : std::vector<std::pair<std::string, std::string>>{
+           {good + "x", "has data past the end of its last level (level count 4)"},
+           {lowered, "has data past the end of its last level (level count 3)"},
+           {wide, "its quantisation range spans more than the float range"}}) {
+    const std::string bad = (dir / "bad.bin").string();
+    test::write_text(bad, bytes);
+    try {
+      read_displacement_stream(bad, &nv, &nt);
+      ADD_FAILURE() << what;
+    } catch (const InputError& err) {
+      EXPECT_EQ(std::string(err.what()), bad + ": " + what);
+    }
+  }
+  const std::string fifo = (dir / "fifo.bin").string();
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  try {
+    read_displacement_stream(fifo, &nv, &nt);
+    ADD_FAILURE() << "fifo";
+  } catch (const InputError& err) {
+    EXPECT_EQ(std::string(err.what()), fifo + ": is not a regular file (a pipe, socket or device)");
+  }
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 #include "image_io_backend.hpp"
 
 #include "meso/core/error.hpp"
+#include "meso/core/input_file.hpp"
 
 #include <dlfcn.h>
 
@@ -41,7 +42,10 @@ bool is_writable_image_extension(const std::filesystem::path& path) {
   return e == ".png" || e == ".exr" || e == ".tif" || e == ".tiff";
 }
 
-Image read_image(const std::filesystem::path& path) { return backend().read_image(path); }
+Image read_image(const std::filesystem::path& path) {
+  require_input_file(path, "an image");
+  return backend().read_image(path);
+}
 
 void write_image(const Image& image, const std::filesystem::path& path, PixelFormat format) {
   backend().write_image(image, path, format);
@@ -51,12 +55,18 @@ void write_image_levels(const std::vector<Image>& levels, const std::filesystem:
   backend().write_image_levels(levels, path, format);
 }
 
-std::vector<Image> read_image_levels(const std::filesystem::path& path) { return backend().read_image_levels(path); }
+std::vector<Image> read_image_levels(const std::filesystem::path& path) {
+  require_input_file(path, "an image");
+  return backend().read_image_levels(path);
+}
 
 void write_image_parts(const std::vector<Image>& parts, const std::filesystem::path& path, PixelFormat format) {
   backend().write_image_parts(parts, path, format);
 }
 
-std::vector<Image> read_image_parts(const std::filesystem::path& path) { return backend().read_image_parts(path); }
+std::vector<Image> read_image_parts(const std::filesystem::path& path) {
+  require_input_file(path, "an image");
+  return backend().read_image_parts(path);
+}
 
 }  // namespace meso

@@ -109,7 +109,7 @@ std::string png_cut_short(const fs::path& path) {
 
 std::unique_ptr<OIIO::ImageInput> open_input(const fs::path& path) {
   const std::string name = path.string();
-  if (!fs::exists(path)) throw InputError(name, "no such file");
+  if (!fs::exists(path)) throw InputError(name, "no such file");  // the readers of image_io.cpp check more first
   // meso's images carry straight (unassociated) alpha, as PNG stores it: ask OIIO not to
   // premultiply on read (and not to divide on write), which would also lose precision.
   OIIO::ImageSpec config;
@@ -138,6 +138,21 @@ Image read_level(OIIO::ImageInput& in, const std::string& name, int level, int s
   const OIIO::ImageSpec& spec = in.spec();
   if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0 || spec.depth > 1)
     throw InputError(name, "unsupported image layout");
+  // The header's size is checked before the pixels are allocated from it (a PNG header
+  // claiming 65536 x 65536 had run the machine out of memory, exit 4). A PNG's rows are
+  // deflate-compressed, which packs at most 1032 bytes into one: more rows than the file can
+  // hold are a damaged header. Any format: more floats than the machine's memory.
+  const double samples = static_cast<double>(spec.width) * spec.height * spec.nchannels;
+  const std::string claim = "its header claims " + std::to_string(spec.width) + " x " + std::to_string(spec.height) + " pixels of " +
+                            std::to_string(spec.nchannels) + " channels";
+  std::error_code ec;
+  const double file_bytes = static_cast<double>(fs::file_size(name, ec));
+  if (!ec && std::string(in.format_name()) == "png" && spec.height * (1.0 + spec.width * spec.nchannels * spec.format.size()) > 1032.0 * file_bytes)
+    throw InputError(name, claim + ", more than its " + std::to_string(static_cast<long long>(file_bytes)) + " bytes can hold (a damaged header)");
+  const double memory = static_cast<double>(::sysconf(_SC_PHYS_PAGES)) * static_cast<double>(::sysconf(_SC_PAGE_SIZE));
+  if (memory > 0 && samples * sizeof(float) > memory)
+    throw InputError(name, claim + ": " + std::to_string(static_cast<long long>(samples * sizeof(float) / 1e9)) +
+                               " GB as floats, more than this machine's memory");
   Image img(spec.width, spec.height, spec.nchannels);
   bool read = false;
   {

@@ -3,6 +3,8 @@
 #include "meso/core/error.hpp"
 #include "test_support.hpp"
 
+#include <sys/stat.h>
+
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfHeader.h>
 #include <OpenEXR/ImfMultiPartInputFile.h>
@@ -253,6 +255,43 @@ TEST(ImageIo, WritesAreDeterministic) {
   write_image(img, dir / "a.png", PixelFormat::uint16);
   write_image(img, dir / "b.png", PixelFormat::uint16);
   EXPECT_EQ(test::read_text(dir / "a.png"), test::read_text(dir / "b.png"));
+}
+
+// A PNG whose header claims more pixels than its data can hold (65536 x 65536, CRC fixed) is
+// refused before the pixels are allocated from it (it had run the machine out of memory,
+// exit 4); a pipe or a device in place of an image is refused before it is opened (a FIFO
+// had blocked the reader).
+TEST(ImageIo, HeadersThatClaimTooMuchAndNonFilesAreRefused) {
+  test::TempDir dir;
+  write_image(Image(16, 16, 3, 0.5f), dir / "small.png", PixelFormat::uint8);
+  std::string png = test::read_text(dir / "small.png");
+  ASSERT_EQ(png.substr(12, 4), "IHDR");
+  for (size_t i : {16u, 20u}) png.replace(i, 4, std::string("\x00\x01\x00\x00", 4));  // width, height 65536
+  uint32_t crc = 0xFFFFFFFFu;  // CRC-32 of the chunk's type and data (PNG's, reflected 0xEDB88320)
+  for (size_t i = 12; i < 12 + 4 + 13; ++i) {
+    crc ^= static_cast<unsigned char>(png[i]);
+    for (int k = 0; k < 8; ++k) crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
+  }
+  crc ^= 0xFFFFFFFFu;
+  for (int k = 0; k < 4; ++k) png[29 + static_cast<size_t>(k)] = static_cast<char>((crc >> (24 - 8 * k)) & 0xFF);
+  test::write_text(dir / "huge.png", png);
+  try {
+    read_image(dir / "huge.png");
+    ADD_FAILURE() << "read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("huge.png: its header claims 65536 x 65536 pixels of 3 channels, more than its"), std::string::npos)
+        << e.what();
+  }
+  const std::filesystem::path fifo = dir / "fifo.exr";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  for (const std::filesystem::path& path : {fifo, std::filesystem::path("/dev/zero")}) {
+    try {
+      read_image(path);
+      ADD_FAILURE() << path;
+    } catch (const InputError& e) {
+      EXPECT_EQ(std::string(e.what()), path.string() + ": is not a regular file (a pipe, socket or device)");
+    }
+  }
 }
 
 }  // namespace

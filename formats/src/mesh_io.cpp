@@ -2,6 +2,8 @@
 #include "meso/formats/atomic_file.hpp"
 
 #include "meso/core/error.hpp"
+#include "meso/core/input_file.hpp"
+#include "meso/core/mesh_extent.hpp"
 #include "meso/core/mesh_arrays.hpp"
 
 #include <OpenMesh/Core/IO/MeshIO.hh>
@@ -50,12 +52,6 @@ namespace meso {
 namespace fs = std::filesystem;
 
 namespace {
-
-std::string format_number(double v) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%g", v);
-  return text;
-}
 
 struct PosKey {
   uint32_t b[3];
@@ -748,8 +744,7 @@ void triangulate_polygon(const aiVector3D* pos, const unsigned* idx, unsigned n,
 
 Mesh read_mesh(const fs::path& path, MeshReadReport* report) {
   const std::string name = path.string();
-  if (!fs::exists(path)) throw InputError(name, "no such file");
-  if (fs::is_directory(path)) throw InputError(name, "is a folder, not a mesh file");
+  require_input_file(path, "a mesh file");
   const bool obj = lower_ext(path) == ".obj";
   const std::string obj_text = obj ? file_text(path, name) : std::string();
   const ObjScan obj_scan = obj ? check_obj_lines(obj_text, name) : ObjScan();
@@ -882,52 +877,13 @@ Mesh read_mesh(const fs::path& path, MeshReadReport* report) {
       }
     }
   }
-  if (mesh.n_faces() == 0) throw InputError(name, "contains no triangles");
   {
-    // meso computes in float where it must (Embree, OpenMesh points, the maps): a mesh whose
-    // extent is near float's limits overflows distances and curvatures to Inf (3e38: every
-    // displacement texel) or loses them to denormals (1e-39: Inf curvatures). Refused here,
-    // once, for every command.
-    OpenMesh::Vec3d lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
-    for (auto v : mesh.vertices()) {
-      if (mesh.is_isolated(v)) continue;  // no face uses it (PLY keeps such vertices, OBJ through assimp does not)
-      const OpenMesh::Vec3d p = OpenMesh::vector_cast<OpenMesh::Vec3d>(mesh.point(v));
-      lo.minimize(p);
-      hi.maximize(p);
-    }
-    const double span = (hi - lo).norm();
-    if (span > kMaxMeshSpan || (span > 0 && span < kMinMeshSpan))
-      throw InputError(name, "its vertices span " + format_number(span) + " units, outside the " + format_number(kMinMeshSpan) + " to " +
-                                 format_number(kMaxMeshSpan) + " that float arithmetic holds (rescale the mesh)");
-    // Far from the origin for its size, a mesh has lost its detail to float rounding by now
-    // (see kMaxFloatStepPerEdge): refused, naming the cause, instead of reduced, packed and
-    // baked into garbage (the demo's meshes moved 1e6 units: the base read with 1,590
-    // non-manifold or degenerate faces and 1,683 UV charts instead of 1, the bake missed 22,755
-    // texels, every stage exited 0). Measured per edge, at the edge's
-    // own place (the step at its larger coordinate over its length, in double: a float's
-    // square underflows below 1e-19), then the median: a scene of small parts near the origin
-    // and a large one far out is intact, and so are layers stacked in a box, which an "edge"
-    // estimated from the box and the face count had taken for a coarse sheet.
-    const double largest = std::max(lo.max_abs(), hi.max_abs());
-    if (span > 0 && largest > 0) {
-      const auto step_at = [](double m) { return m > 0 ? std::max(std::ldexp(1.0, std::ilogb(m) - 23), std::ldexp(1.0, -149)) : 0.0; };
-      std::vector<double> ratios;
-      ratios.reserve(mesh.n_edges());
-      for (auto e : mesh.edges()) {  // (every edge is a face's: isolated vertices have none)
-        const auto h = mesh.halfedge_handle(e, 0);
-        const OpenMesh::Vec3d a = OpenMesh::vector_cast<OpenMesh::Vec3d>(mesh.point(mesh.from_vertex_handle(h)));
-        const OpenMesh::Vec3d b = OpenMesh::vector_cast<OpenMesh::Vec3d>(mesh.point(mesh.to_vertex_handle(h)));
-        const double length = (b - a).norm(), step = step_at(std::max(a.max_abs(), b.max_abs()));
-        ratios.push_back(length > 0 ? step / length : std::numeric_limits<double>::infinity());
-      }
-      std::nth_element(ratios.begin(), ratios.begin() + static_cast<std::ptrdiff_t>(ratios.size() / 2), ratios.end());
-      rep.largest_coordinate = largest;
-      rep.float_step = step_at(largest);
-      rep.step_per_edge = ratios[ratios.size() / 2];
-      if (rep.step_per_edge > kMaxFloatStepPerEdge)
-        throw InputError(name, "its coordinates reach " + format_number(largest) + ", where 32-bit floats step by " + format_number(rep.float_step) +
-                                   ", and at its median edge the step exceeds a quarter of the edge: the mesh lost its shape when read (move it near the origin)");
-    }
+    // meso computes in float where it must (Embree, OpenMesh points, the maps): refused here,
+    // once, for every command (mesh_extent.hpp).
+    const MeshExtent extent = check_mesh_extent(mesh, name);
+    rep.largest_coordinate = extent.largest_coordinate;
+    rep.float_step = extent.float_step;
+    rep.step_per_edge = extent.step_per_edge;
   }
   // An OBJ's faces without `vt` inside a textured object are counted only by the scan (assimp
   // gives them UV 0,0); it also counts those of untextured objects, which the loop above saw.

@@ -6,6 +6,7 @@
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -286,6 +287,16 @@ TEST(MeshIo, MissingFileIsAnInputErrorNamingIt) {
     EXPECT_EQ(e.code(), ExitCode::bad_input);
     EXPECT_NE(std::string(e.what()).find("/nonexistent/meso/mesh.obj"), std::string::npos);
   }
+}
+
+// A pipe or a device named as a mesh is refused before it is opened (a FIFO had blocked the
+// reader until the timeout).
+TEST(MeshIo, PipesAndDevicesAreRefused) {
+  test::TempDir dir;
+  ASSERT_EQ(::mkfifo((dir / "fifo.obj").c_str(), 0600), 0);
+  expect_refused(dir / "fifo.obj", "fifo.obj: is not a regular file (a pipe, socket or device)");
+  expect_refused("/dev/zero", "/dev/zero: is not a regular file");
+  expect_refused(dir.path(), "is a folder, not a mesh file");
 }
 
 TEST(MeshIo, GarbageIsAnInputError) {

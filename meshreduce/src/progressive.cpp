@@ -1,6 +1,8 @@
 #include "meso/meshreduce/progressive.hpp"
 
 #include "meso/core/error.hpp"
+#include "meso/core/input_file.hpp"
+#include "meso/core/mesh_extent.hpp"
 
 #include "collapse_loop.hpp"
 #include "halfedge_collapse.hpp"
@@ -137,6 +139,9 @@ Mesh progressive_base_input(const ProgressiveMesh& pm) {
     for (size_t k = 0; k < 3; ++k) mesh.set_texcoord2D(hs[k], pm.corner_uvs[3 * f + k]);
   }
   set_face_groups(mesh, pm.group_names, groups);
+  // As read_mesh checked the mesh the record was made from (an empty record, or positions
+  // forged to +-3e38 with the checksum recomputed, had replayed into a mesh meso refuses).
+  check_mesh_extent(mesh, name);
   return mesh;
 }
 
@@ -172,6 +177,7 @@ Mesh progressive_level(const ProgressiveMesh& pm, size_t target_faces, size_t* c
     throw InputError(name, "the collapses do not end at the recorded face and UV counts");
   reduce::compact(mesh);
   reduce::clear_boundary_uvs(mesh);
+  check_mesh_extent(mesh, name);  // the recorded positions of the kept vertices too
   compute_angle_weighted_normals(mesh);
   if (collapses) *collapses = k;
   return mesh;
@@ -225,10 +231,9 @@ void write_progressive(const ProgressiveMesh& pm, const std::filesystem::path& p
 
 ProgressiveMesh read_progressive(const std::filesystem::path& path) {
   const std::string name = path.string();
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) throw InputError(name, "is a folder, not a progressive mesh (.pm)");
+  require_input_file(path, "a progressive mesh (.pm)");
   std::ifstream f(path, std::ios::binary);
-  if (!f) throw InputError(name, std::filesystem::exists(path, ec) ? "cannot open" : "no such file");
+  if (!f) throw InputError(name, "cannot open");
   const std::string data((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
   if (f.bad()) throw InputError(name, "cannot read");
   const auto* bytes = reinterpret_cast<const unsigned char*>(data.data());

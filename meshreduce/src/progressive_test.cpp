@@ -247,6 +247,27 @@ TEST(Progressive, DamagedFilesAreInputErrors) {
   wrong = pm;
   wrong.uvs.pop_back();
   EXPECT_THROW(progressive_level(wrong, 0), InputError);
+
+  // A record whose mesh no reader would take (written by hand with a valid checksum): one
+  // position moved to 3e38, a kept vertex recorded at 3e38, an empty mesh. They had replayed
+  // into meshes meso refuses to read back, or an empty OBJ, with exit 0.
+  auto expect_refused_on_replay = [&](const ProgressiveMesh& p, const std::string& problem) {
+    try {
+      progressive_level(p, 0);
+      ADD_FAILURE() << "no error for " << problem;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(problem), std::string::npos) << e.what();
+    }
+  };
+  wrong = pm;
+  wrong.positions[0] = Vec3f(3e38f, 0, 0);
+  expect_refused_on_replay(wrong, "its vertices span 3e+38 units");
+  wrong = pm;
+  wrong.collapses.back().position = Vec3f(-3e38f, 3e38f, 0);
+  expect_refused_on_replay(wrong, "its vertices span");
+  ProgressiveMesh empty;
+  empty.source = "empty.pm";
+  expect_refused_on_replay(empty, "contains no triangles");
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 #pragma once
 
 #include "meso/core/mesh.hpp"
+#include "meso/core/mesh_extent.hpp"
 
 #include <cstddef>
 #include <filesystem>
@@ -27,13 +28,6 @@ struct MeshReadReport {
   double largest_coordinate = 0, float_step = 0, step_per_edge = 0;
 };
 
-// The median step per edge (MeshReadReport::step_per_edge) beyond which read_mesh refuses the
-// mesh (its faces have folded and welded together: a 2-unit mesh 1e6 units from the origin,
-// where floats step by 0.0625), and beyond which the commands warn. The warning's 1/256 is a
-// choice, not a measured threshold; one point measured above it: the demo's meshes scaled by
-// 1e3 and moved 1e6 (a step of 1.6 % of the high mesh's median edge) baked a displacement off
-// by up to 1.7 % of its range, 0.13 % on average.
-constexpr double kMaxFloatStepPerEdge = 0.25, kWarnFloatStepPerEdge = 1.0 / 256;
 
 // Reads a mesh file into the pipeline's Mesh:
 //  - coordinates are the file's own (a COLLADA up_axis is not applied);
@@ -51,8 +45,8 @@ constexpr double kMaxFloatStepPerEdge = 0.25, kWarnFloatStepPerEdge = 1.0 / 256;
 // NaN/infinite coordinate, the bounding-box diagonal of its faces' vertices lies outside
 // [kMinMeshSpan, kMaxMeshSpan] (0 is allowed: a mesh without extent), beyond which float
 // distances, areas and curvatures overflow or vanish, or the mesh lies so far from the origin
-// for its size that float rounding has taken its shape (kMaxFloatStepPerEdge).
-constexpr double kMinMeshSpan = 1e-30, kMaxMeshSpan = 1e36;
+// for its size that float rounding has taken its shape (kMaxFloatStepPerEdge; both in
+// meso/core/mesh_extent.hpp, which the progressive-mesh reader applies too).
 Mesh read_mesh(const std::filesystem::path& path, MeshReadReport* report = nullptr);
 
 // Writes by extension: .obj (per-corner UVs as `vt`, normals), .ply (binary; vertices split
