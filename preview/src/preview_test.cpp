@@ -332,6 +332,36 @@ TEST(Preview, MethodsNeedTheirStreams) {
   EXPECT_THROW(check_cone_matches(build_cone_map(make_height_field(Image(32, 64, 1, 0.0f), Border::clamp), ConeMapOptions{}),
                                   maps.displacement, "conservative", "cone.exr"),
                InputError);
+  // Values that contradict the stream's definition are refused, naming the first such texel
+  // (they had been drawn): a ratio above meso:ratio_cap, an apex below its texel, a pyramid
+  // minimum above its maximum, a negative distance, a distance field of two channels.
+  const Image good_cone = build_cone_map(field, ConeMapOptions{});
+  auto expect_refused = [](auto check, const std::string& message) {
+    try {
+      check();
+      ADD_FAILURE() << message;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+    }
+  };
+  for (const auto& [channel, value] : {std::pair<int, float>{1, 2e4f}, {1, -1.0f}, {2, -0.5f}, {0, 1.5f}}) {
+    Image cone = good_cone;
+    cone.at(3, 2, channel) = value;
+    expect_refused([&] { check_cone_matches(cone, maps.displacement, "conservative", "cone.exr"); },
+                   "cone.exr: texel (3, 2) breaks a cone map's values");
+  }
+  Image pyramid = pyramid_image(own);
+  pyramid.at(1, 1, 0) = 0.9f;  // min above max
+  pyramid.at(1, 1, 1) = 0.1f;
+  expect_refused([&] { check_pyramid_matches(pyramid, maps.displacement, "pyramid.exr"); }, "pyramid.exr: texel (1, 1) breaks a min-max pyramid's values");
+  const Image sdf = distance_field_image(build_distance_field(own, DistanceFieldOptions{}), own);
+  EXPECT_NO_THROW(check_sdf_matches(sdf, maps.displacement, "sdf.exr"));
+  Image negative = sdf;
+  negative.at(0, 5) = -0.25f;
+  expect_refused([&] { check_sdf_matches(negative, maps.displacement, "sdf.exr"); }, "sdf.exr: texel (0, 5) breaks a distance field's values");
+  Image two(sdf.width, sdf.height, 2, 0.0f);
+  two.metadata = sdf.metadata;
+  expect_refused([&] { check_sdf_matches(two, maps.displacement, "sdf.exr"); }, "sdf.exr: needs 1 channel");
   maps.cone = Image();
   EXPECT_THROW(render_headless(quad, maps, centre_uv_options("cone", 30.0f)), UsageError);
 }

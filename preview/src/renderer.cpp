@@ -14,7 +14,9 @@
 #include <map>
 #include <cstdlib>
 #include <cstring>
+#include <functional>
 #include <initializer_list>
+#include <limits>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -81,6 +83,19 @@ std::string string_attribute(const Image& img, const char* key) {
   const std::string* s = std::get_if<std::string>(&it->second);
   return s ? *s : "";
 }
+
+// The first texel of `stream` (level 0) whose channels break what its producer guarantees
+// (`ok` on the texel's channel values), named in the error: streams whose values contradict
+// their definition (ratios above the cap, a minimum above the maximum, negative distances)
+// had been drawn without a word.
+template <typename Ok>
+void check_stream_values(const Image& stream, const std::string& name, const char* what, Ok ok) {
+  const size_t channels = static_cast<size_t>(stream.channels);
+  for (size_t i = 0; i < stream.texel_count(); ++i)
+    if (!ok(&stream.pixels[i * channels]))
+      throw InputError(name, "texel (" + std::to_string(i % static_cast<size_t>(stream.width)) + ", " +
+                                 std::to_string(i / static_cast<size_t>(stream.width)) + ") breaks " + what);
+}
 }  // namespace
 
 bool maps_tile(const PreviewMaps& maps) {
@@ -93,6 +108,9 @@ void check_sdf_matches(const Image& sdf, const Image& displacement, const std::s
   const int depth = static_cast<int>(stream_number(sdf, "depth", name));
   if (depth < 1 || sdf.height % depth != 0 || sdf.width != displacement.width || sdf.height / depth != displacement.height)
     throw InputError(name, "its size does not match displacement.exr (made from another height map?)");
+  if (sdf.channels != 1) throw InputError(name, "needs 1 channel (the distance): is it meso streams sdf's output?");
+  if (!(stream_number(sdf, "relief", name) > 0)) throw InputError(name, "its meso:relief is not a height range > 0");
+  check_stream_values(sdf, name, "a distance field's values (distances >= 0)", [](const float* v) { return v[0] >= 0; });
   check_height_range(sdf, displacement, name, "meso streams sdf");
 }
 
@@ -108,6 +126,9 @@ void check_cone_matches(const Image& cone, const Image& displacement, const std:
   // Ratios are stored in units of u: texels_per_u must be the width the shader multiplies by.
   if (cone.metadata.count("texels_per_u") && static_cast<int>(stream_number(cone, "texels_per_u", name, producer)) != cone.width)
     throw InputError(name, "its meso:texels_per_u differs from its width");
+  const float cap = cone.metadata.count("ratio_cap") ? stream_number(cone, "ratio_cap", name, producer) : std::numeric_limits<float>::max();
+  check_stream_values(cone, name, "a cone map's values (height in [0, 1], ratio in [0, meso:ratio_cap], apex >= height)",
+                      [cap](const float* v) { return v[0] >= 0 && v[0] <= 1 && v[1] >= 0 && v[1] <= cap && v[2] >= v[0]; });
   check_height_range(cone, displacement, name, producer);
 }
 
@@ -115,6 +136,8 @@ void check_pyramid_matches(const Image& pyramid, const Image& displacement, cons
   if (pyramid.channels != 2) throw InputError(name, "needs 2 channels (min, max): is it meso streams pyramid's output?");
   if (pyramid.width != displacement.width || pyramid.height != displacement.height)
     throw InputError(name, "its size does not match displacement.exr (made from another height map?)");
+  check_stream_values(pyramid, name, "a min-max pyramid's values (0 <= min <= max <= 1)",
+                      [](const float* v) { return v[0] >= 0 && v[0] <= v[1] && v[1] <= 1; });
   check_height_range(pyramid, displacement, name, "meso streams pyramid");
 }
 
@@ -136,7 +159,8 @@ std::vector<float> vdm_curvatures(const Image& weights, const std::string& name)
     out.push_back(c);
   }
   if (out.empty()) throw InputError(name, "lacks the meso:curvatures attribute of meso streams vdm");
-  if (!std::is_sorted(out.begin(), out.end())) throw InputError(name, "its curvatures are not in increasing order");
+  if (std::adjacent_find(out.begin(), out.end(), std::greater_equal<float>()) != out.end())
+    throw InputError(name, "its curvatures are not in strictly increasing order");
   return out;
 }
 
