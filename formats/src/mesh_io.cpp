@@ -109,6 +109,23 @@ std::string file_text(const fs::path& path, const std::string& name) {
   return text;
 }
 
+// A token of a numeric field as a message shows it: bytes outside printable ASCII (a damaged
+// file's control bytes, which a terminal would not show) as \xNN.
+std::string shown_token(std::string_view token) {
+  std::string out;
+  for (const char c : token) {
+    const auto b = static_cast<unsigned char>(c);
+    if (b >= 0x20 && b < 0x7f) {
+      out += c;
+    } else {
+      char hex[5];
+      std::snprintf(hex, sizeof hex, "\\x%02X", b);
+      out += hex;
+    }
+  }
+  return out;
+}
+
 // assimp's OBJ reader turns a texture coordinate it cannot parse ("nan", "inf", "0,5") into 0,
 // and when a face names a texture coordinate the file does not have it drops every UV of the
 // file, without a word either time: a bake would then read a wrong or missing mapping; a `v`
@@ -287,13 +304,13 @@ ObjScan check_obj_lines(const std::string& text, const std::string& name) {
           continue;
         }
         if (!float_number(t, q))
-          throw InputError(name, where() + ": vertex coordinate '" + std::string(token) + "' is not a finite number (as a float)");
+          throw InputError(name, where() + ": vertex coordinate '" + shown_token(token) + "' is not a finite number (as a float)");
         readable = read_both(t, q, read[values - 1], exact[values - 1]) && readable;
         continue;
       }
       if (vt) {
         if (!float_number(t, q))
-          throw InputError(name, where() + ": texture coordinate '" + std::string(token) + "' is not a finite number (as a float)");
+          throw InputError(name, where() + ": texture coordinate '" + shown_token(token) + "' is not a finite number (as a float)");
         if (++values <= 2) readable = read_both(t, q, read[values - 1], exact[values - 1]) && readable;
         continue;
       }
@@ -312,9 +329,14 @@ ObjScan check_obj_lines(const std::string& text, const std::string& name) {
       // may name a `vt` further down (assimp resolves them after the whole file), so the
       // largest is checked at the end.
       const bool parsed = ec == std::errc() && (ptr == q || *ptr == '/');
-      if (!parsed || index == 0 || (index < 0 && texcoords + index < 0))
-        throw InputError(name, where() + ": face corner '" + std::string(token) + "' names texture coordinate " +
-                                   std::string(a, ptr == a ? q : ptr) + ", but the file has " + std::to_string(texcoords) +
+      if (!parsed) {
+        const char* index_end = static_cast<const char*>(std::memchr(a, '/', static_cast<size_t>(q - a)));
+        throw InputError(name, where() + ": face corner '" + shown_token(token) + "': its texture coordinate index '" +
+                                   shown_token(std::string_view(a, static_cast<size_t>((index_end ? index_end : q) - a))) + "' is not an integer");
+      }
+      if (index == 0 || (index < 0 && texcoords + index < 0))
+        throw InputError(name, where() + ": face corner '" + shown_token(token) + "' names texture coordinate " +
+                                   std::string(a, ptr) + ", but the file has " + std::to_string(texcoords) +
                                    " before it");
       if (index > largest) largest = index, largest_line = line, largest_token = token;
       ++textured;

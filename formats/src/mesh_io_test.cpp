@@ -435,6 +435,10 @@ TEST(MeshIo, ObjTextureCoordinatesAreCheckedNotRepaired) {
        "line 10: 2 of the face's 3 corners name a normal (v/vt/vn or v//vn), the others none"},
       {"zero.obj", quad + "vt 0 0\nvt 1 0\nvt 1 1\nf 1/0 2/2 3/3\n", "line 8: face corner '1/0'"},
       {"back.obj", quad + "vt 0 0\nf 1/-1 2/-2 3/-1\n", "line 6: face corner '2/-2' names texture coordinate -2, but the file has 1 before it"},
+      // A damaged index, and a control byte shown (a byte flipped in a file: the message had
+      // said "names texture coordinate 16, but the file has 324 before it").
+      {"junk.obj", quad + "vt 0 0\nvt 1 0\nvt 1 1\nf 1/1 2/2J 3/3\n", "line 8: face corner '2/2J': its texture coordinate index '2J' is not an integer"},
+      {"ctrl.obj", "v 0 0 0\nv 1 0 0.\x03" "5\nv 1 1 0\nf 1 2 3\n", "line 2: vertex coordinate '0.\\x035' is not a finite number"},
       // A file cut inside its last face: assimp had read it without that face, exit 0.
       {"cutf.obj", quad + "f 1 2 3\nf \n", "line 6: a face needs at least three vertices"},
       {"cutf2.obj", quad + "f 1 2 3\nf 1 3", "line 6: a face needs at least three vertices"},
