@@ -135,7 +135,9 @@ UvCheckReport check_uv_mapping(const Mesh& mesh, const UvCheckOptions& o) {
       outside |= t[0] < 0 || t[0] > 1 || t[1] < 0 || t[1] > 1;
     }
     if (outside) r.outside_faces.push_back(f.idx());
-    if (uv_double_area(mesh, f) == 0.0) {
+    // Degenerate: zero UV area, or too thin for the rasteriser's double arithmetic at this
+    // size (a sliver 1e-20 high in v had touched no texel without being reported).
+    if (uv_double_area(mesh, f) == 0.0 || degenerate_in_pixels(uv_triangle_in_pixels(mesh, f, o.size, o.size))) {
       r.degenerate_faces.push_back(f.idx());
       continue;
     }

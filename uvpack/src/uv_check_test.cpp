@@ -184,6 +184,13 @@ TEST(UvCheck, ReportsDegenerateAndOutsideFaces) {
   const UvCheckReport r = check_uv_mapping(m, o);
   EXPECT_EQ(r.degenerate_faces, (std::vector<int>{1}));
   EXPECT_EQ(r.outside_faces, (std::vector<int>{3}));
+  // A sliver of nonzero UV area whose height (1e-20 in v) double arithmetic cannot resolve in
+  // pixels (1 - v = 1) touches no texel: it is reported degenerate, not silently ignored.
+  const std::array<Vec2f, 3> sliver = {Vec2f(0.1f, 0.0f), Vec2f(0.3f, 0.0f), Vec2f(0.2f, 1e-20f)};
+  const auto hs = face_halfedges(m, FaceHandle(0));
+  for (size_t k = 0; k < 3; ++k) m.set_texcoord2D(hs[k], sliver[k]);
+  ASSERT_NE(uv_double_area(m, FaceHandle(0)), 0.0);
+  EXPECT_EQ(check_uv_mapping(m, o).degenerate_faces, (std::vector<int>{0, 1}));
 }
 
 // Axis-aligned UV quads, each its own chart: [x0, x1) x [y0, y1) in texels of a size^2 texture

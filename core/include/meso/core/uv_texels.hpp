@@ -27,6 +27,18 @@ UvTriangle uv_triangle_in_pixels(const Mesh& mesh, FaceHandle f, int width, int 
 // axis), as rounding the corners to float does.
 bool triangle_overlaps_texel(const UvTriangle& t, int x, int y, double grow = 0);
 
+// Whether the triangle is degenerate in pixel units as the rasteriser computes it (a corner on
+// the opposite edge's line): such a triangle touches no texel. A UV triangle of nonzero area
+// can be degenerate here when it is thinner than double arithmetic resolves at this size
+// (about 1e-16 of the texture: a v of 1e-20 is 1 - v = 1).
+inline bool degenerate_in_pixels(const UvTriangle& t) {
+  for (int i = 0; i < 3; ++i) {
+    const int j = (i + 1) % 3, k = (i + 2) % 3;
+    if ((t.py[j] - t.py[i]) * (t.px[k] - t.px[i]) + (t.px[i] - t.px[j]) * (t.py[k] - t.py[i]) == 0) return true;
+  }
+  return false;
+}
+
 // Calls fn(x, y) for every texel of a width x height grid the triangle touches, row by row;
 // only rows [row0, row1) when given. `grow` (below 1) as triangle_overlaps_texel's.
 template <class Fn>
@@ -38,10 +50,7 @@ void for_each_touched_texel(const UvTriangle& t, int width, int height, Fn&& fn,
   y1 = std::min(y1, row1 - 1);
   // A degenerate triangle touches nothing: the separating-axis test rejects every texel when
   // any corner lies on the opposite edge's line (computed as it computes it).
-  for (int i = 0; i < 3; ++i) {
-    const int j = (i + 1) % 3, k = (i + 2) % 3;
-    if ((t.py[j] - t.py[i]) * (t.px[k] - t.px[i]) + (t.px[i] - t.px[j]) * (t.py[k] - t.py[i]) == 0) return;
-  }
+  if (degenerate_in_pixels(t)) return;
   const double ymin = std::min({t.py[0], t.py[1], t.py[2]}), ymax = std::max({t.py[0], t.py[1], t.py[2]});
   for (int y = y0; y <= y1; ++y) {
     const double strip0 = y - grow, strip1 = y + 1.0 + grow;  // the row's (grown) squares

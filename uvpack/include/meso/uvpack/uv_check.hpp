@@ -45,7 +45,7 @@ struct UvCheckReport {
   // filtering would mix the charts there). Sorted.
   std::vector<int> shared_texel_faces;
   std::vector<int> flipped_faces;      // UV winding against the majority (by area) of their chart; sorted
-  std::vector<int> degenerate_faces;   // zero UV area; sorted
+  std::vector<int> degenerate_faces;   // zero UV area, or thinner than double arithmetic resolves at `size` (touch no texel); sorted
   std::vector<int> outside_faces;      // a UV outside [0,1]; sorted
   std::vector<ChartGap> padding_violations;  // chart pairs closer than options.padding texels
   std::vector<ChartDensity> texel_density;   // per chart with surface area
