@@ -517,6 +517,19 @@ TEST(Cli, StreamsRefuseABrokenHeightMapping) {
     EXPECT_NE(r.err.find("m.png: its meso:height_scale is not a finite number"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(dir / "c.exr"));
   }
+  // A range float cannot hold: the scale lost in the bias (every height had come out the
+  // same), or bias + scale beyond the float range.
+  for (const auto& [bias, scale, message] : {std::tuple<std::string, std::string, std::string>{"3e38", "1", "is below a float step"},
+                                             {"3e38", "1e38", "overflows a float"}}) {
+    img.metadata["height_bias"] = bias;
+    img.metadata["height_scale"] = scale;
+    write_image(img, dir / "m.png", PixelFormat::uint16);
+    const Result r = run("streams cone " + (dir / "m.png").string() + " -o " + (dir / "c.exr").string());
+    EXPECT_EQ(r.code, 3) << bias << " " << scale << ": " << r.err;
+    EXPECT_NE(r.err.find(message), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "c.exr"));
+  }
+  img.metadata["height_bias"] = 0.0f;
   img.metadata["height_scale"] = 2.0f;
   write_image(img, dir / "m.png", PixelFormat::uint16);
   EXPECT_EQ(run("streams cone " + (dir / "m.png").string() + " -o " + (dir / "c.exr").string()).code, 0);

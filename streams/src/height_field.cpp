@@ -58,6 +58,10 @@ std::string height_mapping_problem(const ImageMetadata& metadata) {
   const float scale = metadata_number(metadata, "height_scale"), bias = metadata_number(metadata, "height_bias");
   if (!(std::isfinite(scale) && scale >= 0)) return "its meso:height_scale is not a finite number >= 0";
   if (!std::isfinite(bias)) return "its meso:height_bias is not a finite number";
+  // A mapping whose range float cannot hold: bias + scale overflows, or the scale is lost in
+  // the bias (a bias of 3e38 had flattened every height to one value without a word).
+  if (!std::isfinite(bias + scale)) return "its meso:height_bias + meso:height_scale overflows a float";
+  if (scale > 0 && bias + scale == bias) return "its meso:height_scale is below a float step at its meso:height_bias";
   return "";
 }
 

@@ -44,7 +44,8 @@ HeightField make_height_field(const Image& image, Border border);
 
 // What is wrong with the map's own mapping to object units, or "" when it has none or a
 // usable one: a height_scale or height_bias that is present but not a finite number (and a
-// scale >= 0), or one given without the other. For a loader to refuse such a map, which
+// scale >= 0), one given without the other, or a pair whose range float cannot hold (bias +
+// scale overflows, or a nonzero scale below a float step at the bias). For a loader to refuse such a map, which
 // make_height_field would otherwise take as raw values.
 std::string height_mapping_problem(const ImageMetadata& metadata);
 
