@@ -11,22 +11,52 @@
 #include <stdexcept>
 #include <string>
 #include <tuple>
-#include <unordered_map>
 #include <vector>
 
 namespace meso {
 
 namespace {
 
-// The charts after the first that touch a texel (sorted, distinct), for the texels several
-// charts touch (already reported as shared).
-using MoreCharts = std::unordered_map<size_t, std::vector<int>>;
+// The charts touching each texel after the first (which `first_chart` holds): a second one
+// per texel, and the rare third and further ones apart (sorted, distinct). A flat array, not a
+// map of lists: mirrored halves stacked on one UV island make every texel of it shared.
+struct MoreCharts {
+  std::vector<int> second;                     // -1: none (empty until a texel is shared)
+  std::map<size_t, std::vector<int>> further;  // a third chart and more
+  void add(size_t n, size_t i, int c) {
+    if (second.empty()) second.assign(n, -1);
+    if (second[i] < 0 || second[i] == c) {
+      second[i] = c;
+      return;
+    }
+    auto& list = further[i];
+    if (std::find(list.begin(), list.end(), c) == list.end()) list.insert(std::upper_bound(list.begin(), list.end(), c), c);
+  }
+  template <class Fn>
+  void for_each(size_t i, Fn&& fn) const {
+    if (second.empty() || second[i] < 0) return;
+    fn(second[i]);
+    const auto it = further.find(i);
+    if (it != further.end())
+      for (int c : it->second) fn(c);
+  }
+};
+
+// A few distinct charts (a texel's neighbourhood rarely holds more than two or three).
+struct ChartSet {
+  std::vector<int> items;
+  void insert(int c) {
+    if (c >= 0 && std::find(items.begin(), items.end(), c) == items.end()) items.push_back(c);
+  }
+};
 
 // The mip-safety check of uv_check.hpp on the touched texels' charts (`touch`: the first
 // chart touching each texel, -1 for none; `more`: the others). Every chart touching a texel
 // reads around it, and a texel several charts touch holds all of their values (the bake
 // writes one of them, which one depends on the face order), so the verdict does not depend
-// on the faces' order.
+// on the faces' order. Per level, each level-k texel is visited once: the charts that read it
+// (those touching a level-0 texel within one level-k texel of it) against the charts whose
+// values it holds; about 10 level-0 reads per texel and level, and no list of hits.
 void check_mip_levels(const std::vector<int>& touch, const MoreCharts& more, int size, int levels, UvCheckReport& r) {
   if (levels > 14 || size % (1 << levels) != 0)
     throw std::invalid_argument("mip_safe " + std::to_string(levels) + " needs a size that is a multiple of 2^" + std::to_string(levels));
@@ -34,79 +64,73 @@ void check_mip_levels(const std::vector<int>& touch, const MoreCharts& more, int
   std::vector<uint8_t> written(n);
   for (size_t i = 0; i < n; ++i) written[i] = touch[i] >= 0;
   const std::vector<int32_t> source = dilation_sources(written, size, size, -1);
-  std::vector<int> owner(n, -1);  // the (first) chart whose value each texel holds after dilation
-  for (size_t i = 0; i < n; ++i)
-    if (source[i] >= 0) owner[i] = touch[static_cast<size_t>(source[i])];
-  // The other charts of the texel whose value texel i holds (touching texel: itself).
-  auto more_of = [&](const std::vector<int>& label, size_t i) -> const std::vector<int>* {
-    const size_t from = &label == &owner ? static_cast<size_t>(source[i]) : i;
-    if (label[i] < 0 || more.empty()) return nullptr;
-    const auto it = more.find(from);
-    return it == more.end() ? nullptr : &it->second;
-  };
-  constexpr int kMixed = -2;
   std::map<std::tuple<int, int, int>, size_t> found;  // (level, chart, reads) -> texels
   r.mip_safe_levels = levels;
+  ChartSet readers, holders;
+  std::vector<std::tuple<int, int, size_t>> counts;  // (chart, reads, texels) of this level
   for (int k = 0; k <= levels; ++k) {
     const int b = 1 << k, cn = size >> k;
-    // Per level-k texel: the one chart whose values it holds (kMixed: several, -1: none), and
-    // the one chart touching it (kMixed: several, -1: none).
-    std::vector<int> holds(static_cast<size_t>(cn) * static_cast<size_t>(cn)), touched(holds.size());
-    for (int cy = 0; cy < cn; ++cy)
-      for (int cx = 0; cx < cn; ++cx) {
-        int h = owner[static_cast<size_t>(cy * b) * static_cast<size_t>(size) + static_cast<size_t>(cx * b)], t = -1;
-        for (int y = cy * b; y < (cy + 1) * b; ++y)
-          for (int x = cx * b; x < (cx + 1) * b; ++x) {
-            const size_t i = static_cast<size_t>(y) * static_cast<size_t>(size) + static_cast<size_t>(x);
-            if (owner[i] != h || more_of(owner, i)) h = kMixed;
-            if (touch[i] >= 0) t = (t == -1 || t == touch[i]) && !more_of(touch, i) ? touch[i] : kMixed;
-          }
-        holds[static_cast<size_t>(cy) * static_cast<size_t>(cn) + static_cast<size_t>(cx)] = h;
-        touched[static_cast<size_t>(cy) * static_cast<size_t>(cn) + static_cast<size_t>(cx)] = t;
-      }
-    // The distinct charts (>= 0, increasing) that `label` gives the level-0 texels of level-k
-    // texel (cx, cy): with owner, the charts whose values it holds; with touch, those touching it.
-    auto charts_in = [&](const std::vector<int>& label, int cx, int cy) {
-      std::vector<int> cs;
+    // The charts of the level-0 texels of level-k texel (cx, cy): touching them (`set` gets
+    // them as readers), or whose values they hold after the dilation.
+    auto touching = [&](int cx, int cy, ChartSet& set) {
       for (int y = cy * b; y < (cy + 1) * b; ++y)
         for (int x = cx * b; x < (cx + 1) * b; ++x) {
           const size_t i = static_cast<size_t>(y) * static_cast<size_t>(size) + static_cast<size_t>(x);
-          if (label[i] < 0) continue;
-          cs.push_back(label[i]);
-          if (const auto* others = more_of(label, i)) cs.insert(cs.end(), others->begin(), others->end());
+          set.insert(touch[i]);
+          more.for_each(i, [&](int c) { set.insert(c); });
         }
-      std::sort(cs.begin(), cs.end());
-      cs.erase(std::unique(cs.begin(), cs.end()), cs.end());
-      return cs;
     };
-    bool clean = true;
-    // Each level-k texel a reader reaches counts once per (chart, reads), however many
-    // touched texels reach it: collect (texel, chart, reads) first.
-    std::vector<std::tuple<size_t, int, int>> hits;
+    auto holding = [&](int cx, int cy, ChartSet& set) {
+      for (int y = cy * b; y < (cy + 1) * b; ++y)
+        for (int x = cx * b; x < (cx + 1) * b; ++x) {
+          const int32_t from = source[static_cast<size_t>(y) * static_cast<size_t>(size) + static_cast<size_t>(x)];
+          if (from < 0) continue;
+          set.insert(touch[static_cast<size_t>(from)]);
+          more.for_each(static_cast<size_t>(from), [&](int c) { set.insert(c); });
+        }
+    };
+    // First per level-k texel one chart or none (-1) or several (kMixed), for what touches it
+    // and what it holds: a texel holding one chart that only it, or nothing, touches around it
+    // (most texels) needs no sets.
+    constexpr int kMixed = -2;
+    std::vector<int> touched(static_cast<size_t>(cn) * static_cast<size_t>(cn)), held(touched.size());
     for (int cy = 0; cy < cn; ++cy)
       for (int cx = 0; cx < cn; ++cx) {
-        const int t = touched[static_cast<size_t>(cy) * static_cast<size_t>(cn) + static_cast<size_t>(cx)];
-        if (t == -1) continue;
-        // Several charts touching it: each of them reads its neighbourhood.
-        const std::vector<int> readers = t == kMixed ? charts_in(touch, cx, cy) : std::vector<int>{t};
+        readers.items.clear();
+        holders.items.clear();
+        touching(cx, cy, readers);
+        holding(cx, cy, holders);
+        const size_t c = static_cast<size_t>(cy) * static_cast<size_t>(cn) + static_cast<size_t>(cx);
+        touched[c] = readers.items.empty() ? -1 : readers.items.size() == 1 ? readers.items[0] : kMixed;
+        held[c] = holders.items.empty() ? -1 : holders.items.size() == 1 ? holders.items[0] : kMixed;
+      }
+    counts.clear();
+    for (int cy = 0; cy < cn; ++cy)
+      for (int cx = 0; cx < cn; ++cx) {
+        const int h = held[static_cast<size_t>(cy) * static_cast<size_t>(cn) + static_cast<size_t>(cx)];
+        if (h == -1) continue;
+        bool clean = h != kMixed;
+        for (int ny = std::max(0, cy - 1); clean && ny <= std::min(cn - 1, cy + 1); ++ny)
+          for (int nx = std::max(0, cx - 1); clean && nx <= std::min(cn - 1, cx + 1); ++nx) {
+            const int t = touched[static_cast<size_t>(ny) * static_cast<size_t>(cn) + static_cast<size_t>(nx)];
+            clean = t == -1 || t == h;
+          }
+        if (clean) continue;
+        holders.items.clear();
+        holding(cx, cy, holders);
+        readers.items.clear();
         for (int ny = std::max(0, cy - 1); ny <= std::min(cn - 1, cy + 1); ++ny)
-          for (int nx = std::max(0, cx - 1); nx <= std::min(cn - 1, cx + 1); ++nx) {
-            const size_t ni = static_cast<size_t>(ny) * static_cast<size_t>(cn) + static_cast<size_t>(nx);
-            const int h = holds[ni];
-            for (int reader : readers) {
-              if (h == reader) continue;
-              for (int other : h == kMixed ? charts_in(owner, nx, ny) : std::vector<int>{h})
-                if (other >= 0 && other != reader) hits.emplace_back(ni, reader, other);
-            }
+          for (int nx = std::max(0, cx - 1); nx <= std::min(cn - 1, cx + 1); ++nx) touching(nx, ny, readers);
+        for (int reader : readers.items)
+          for (int other : holders.items) {
+            if (other == reader) continue;
+            auto it = std::find_if(counts.begin(), counts.end(), [&](const auto& c) { return std::get<0>(c) == reader && std::get<1>(c) == other; });
+            if (it == counts.end()) counts.emplace_back(reader, other, 1);
+            else ++std::get<2>(*it);
           }
       }
-    std::sort(hits.begin(), hits.end());
-    hits.erase(std::unique(hits.begin(), hits.end()), hits.end());
-    for (const auto& [texel, chart, reads] : hits) {
-      ++found[{k, chart, reads}];
-      clean = false;
-    }
-    if (!clean && r.mip_safe_levels == levels) r.mip_safe_levels = k - 1;
+    for (const auto& [chart, reads, texels] : counts) found[{k, chart, reads}] += texels;
+    if (!counts.empty() && r.mip_safe_levels == levels) r.mip_safe_levels = k - 1;
   }
   for (const auto& [key, texels] : found) r.mip_violations.push_back({std::get<0>(key), std::get<1>(key), std::get<2>(key), texels});
 }
@@ -147,13 +171,9 @@ UvCheckReport check_uv_mapping(const Mesh& mesh, const UvCheckOptions& o) {
         first_chart[i] = c;
       } else if (first_chart[i] != c) {
         shared[i] = 1;
-        if (o.mip_safe >= 0) more_charts[i].push_back(c);
+        if (o.mip_safe >= 0) more_charts.add(n, i, c);
       }
     });
-  }
-  for (auto& [texel, charts] : more_charts) {
-    std::sort(charts.begin(), charts.end());
-    charts.erase(std::unique(charts.begin(), charts.end()), charts.end());
   }
   for (auto f : mesh.faces()) {
     if (uv_double_area(mesh, f) == 0.0) continue;
