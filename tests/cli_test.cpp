@@ -1,5 +1,6 @@
 // End-to-end tests of the `meso` command: exit codes, error lines, no partial output, and
 // the walking skeleton on a small generated asset whose answer is known.
+#include "meso/core/memory.hpp"
 #include "meso/examples/brick_wall.hpp"
 #include "meso/formats/image_io.hpp"
 #include "meso/formats/mesh_io.hpp"
@@ -355,8 +356,7 @@ TEST(Cli, BoundedNumbersRefuseNanAndSayTheirRange) {
 // A bake whose maps cannot fit in this machine's memory is refused before any work (32768^2,
 // about 53 GB, had run a 24 GB machine out of memory).
 TEST(Cli, BakeBeyondTheMachinesMemoryIsRefused) {
-  const double physical = static_cast<double>(::sysconf(_SC_PHYS_PAGES)) * static_cast<double>(::sysconf(_SC_PAGE_SIZE));
-  if (physical > 50e9) GTEST_SKIP() << "this machine could hold a 32768^2 bake";
+  if (physical_memory_bytes() > 50e9) GTEST_SKIP() << "this machine could hold a 32768^2 bake";
   const Result r = run("bake --low a.obj --high b.obj -o d --size 32768");
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_EQ(lines(r.err), 1u) << r.err;

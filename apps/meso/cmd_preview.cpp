@@ -55,11 +55,11 @@ void write_frame(Image frame, const std::filesystem::path& temp, PreviewShade sh
   write_image(frame, temp, PixelFormat::uint8);
 }
 
-// The quantity a meso map records (meso:quantity), or "" for a map from elsewhere.
-std::string map_quantity(const Image& map) {
-  const auto it = map.metadata.find("quantity");
-  const std::string* q = it == map.metadata.end() ? nullptr : std::get_if<std::string>(&it->second);
-  return q ? *q : std::string();
+// A text attribute of a map (meso:quantity, meso:normal_y, ...), or "" (a map from elsewhere).
+std::string text_attribute(const Image& map, const char* key) {
+  const auto it = map.metadata.find(key);
+  const std::string* v = it == map.metadata.end() ? nullptr : std::get_if<std::string>(&it->second);
+  return v ? *v : std::string();
 }
 
 // displacement.exr in object units. A map that records its mapping to object units (bake's
@@ -68,7 +68,7 @@ std::string map_quantity(const Image& map) {
 // relief. Another meso map under this name (a stream, a normal map) is refused.
 Image read_displacement(const std::filesystem::path& file) {
   Image map = read_image(file);
-  const std::string quantity = map_quantity(map);
+  const std::string quantity = text_attribute(map, "quantity");
   if (!quantity.empty() && quantity != "displacement")
     throw InputError(file.string(), "holds a " + quantity + " (meso:quantity), not a displacement map");
   const std::string mapping = height_mapping_problem(map.metadata);
@@ -82,16 +82,11 @@ Image read_displacement(const std::filesystem::path& file) {
 Image read_tangent_normals(const std::filesystem::path& file) {
   Image map = read_image(file);
   if (map.channels < 3) throw InputError(file.string(), "needs 3 channels (a tangent-space normal map)");
-  const std::string quantity = map_quantity(map);
+  const std::string quantity = text_attribute(map, "quantity");
   if (!quantity.empty() && quantity != "normal")
     throw InputError(file.string(), "holds a " + quantity + " (meso:quantity), not a tangent-space normal map");
-  const auto text = [&](const char* key) {
-    const auto it = map.metadata.find(key);
-    const std::string* v = it == map.metadata.end() ? nullptr : std::get_if<std::string>(&it->second);
-    return v ? *v : std::string();
-  };
-  if (text("space").rfind("object", 0) == 0) throw InputError(file.string(), "is an object-space normal map; the previewer needs bake's normal_ts");
-  const std::string y = text("normal_y");
+  if (text_attribute(map, "space").rfind("object", 0) == 0) throw InputError(file.string(), "is an object-space normal map; the previewer needs bake's normal_ts");
+  const std::string y = text_attribute(map, "normal_y");
   if (!y.empty() && y != "up" && y != "down") throw InputError(file.string(), "its meso:normal_y is '" + y + "' (up or down)");
   if (y == "down")  // stored as (n + 1) / 2: n.y -> -n.y is c -> 1 - c
     for (size_t i = 1; i < map.pixels.size(); i += static_cast<size_t>(map.channels)) map.pixels[i] = 1.0f - map.pixels[i];

@@ -6,6 +6,7 @@
 #include "meso/formats/image_io.hpp"
 
 #include "meso/core/error.hpp"
+#include "meso/core/memory.hpp"
 
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
@@ -107,7 +108,7 @@ void refuse_overwriting_input(const std::string& output, const std::vector<std::
 }
 
 void refuse_beyond_memory(const std::string& what, double bytes) {
-  const double physical = static_cast<double>(::sysconf(_SC_PHYS_PAGES)) * static_cast<double>(::sysconf(_SC_PAGE_SIZE));
+  const double physical = physical_memory_bytes();
   if (physical > 0 && bytes > physical) {
     char text[160];
     std::snprintf(text, sizeof text, " needs about %.1f GB of memory, more than this machine's %.1f GB", bytes / 1e9, physical / 1e9);

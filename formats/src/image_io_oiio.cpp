@@ -3,6 +3,7 @@
 #include "image_io_backend.hpp"
 
 #include "meso/core/error.hpp"
+#include "meso/core/memory.hpp"
 #include "meso/formats/atomic_file.hpp"
 
 #include <OpenImageIO/filesystem.h>
@@ -139,20 +140,15 @@ Image read_level(OIIO::ImageInput& in, const std::string& name, int level, int s
   if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0 || spec.depth > 1)
     throw InputError(name, "unsupported image layout");
   // The header's size is checked before the pixels are allocated from it (a PNG header
-  // claiming 65536 x 65536 had run the machine out of memory, exit 4). A PNG's rows are
-  // deflate-compressed, which packs at most 1032 bytes into one: more rows than the file can
-  // hold are a damaged header. Any format: more floats than the machine's memory.
-  const double samples = static_cast<double>(spec.width) * spec.height * spec.nchannels;
-  const std::string claim = "its header claims " + std::to_string(spec.width) + " x " + std::to_string(spec.height) + " pixels of " +
-                            std::to_string(spec.nchannels) + " channels";
-  std::error_code ec;
-  const double file_bytes = static_cast<double>(fs::file_size(name, ec));
-  if (!ec && std::string(in.format_name()) == "png" && spec.height * (1.0 + spec.width * spec.nchannels * spec.format.size()) > 1032.0 * file_bytes)
-    throw InputError(name, claim + ", more than its " + std::to_string(static_cast<long long>(file_bytes)) + " bytes can hold (a damaged header)");
-  const double memory = static_cast<double>(::sysconf(_SC_PHYS_PAGES)) * static_cast<double>(::sysconf(_SC_PAGE_SIZE));
-  if (memory > 0 && samples * sizeof(float) > memory)
-    throw InputError(name, claim + ": " + std::to_string(static_cast<long long>(samples * sizeof(float) / 1e9)) +
-                               " GB as floats, more than this machine's memory");
+  // claiming 65536 x 65536 had run the machine out of memory, exit 4): as floats, more than
+  // the machine's memory cannot be read here.
+  const double bytes = static_cast<double>(spec.width) * spec.height * spec.nchannels * sizeof(float), memory = physical_memory_bytes();
+  if (memory > 0 && bytes > memory) {
+    char text[200];
+    std::snprintf(text, sizeof text, "its header claims %d x %d pixels of %d channels: %.1f GB as floats, more than this machine's %.1f GB",
+                  spec.width, spec.height, spec.nchannels, bytes / 1e9, memory / 1e9);
+    throw InputError(name, text);
+  }
   Image img(spec.width, spec.height, spec.nchannels);
   bool read = false;
   {

@@ -257,16 +257,16 @@ TEST(ImageIo, WritesAreDeterministic) {
   EXPECT_EQ(test::read_text(dir / "a.png"), test::read_text(dir / "b.png"));
 }
 
-// A PNG whose header claims more pixels than its data can hold (65536 x 65536, CRC fixed) is
-// refused before the pixels are allocated from it (it had run the machine out of memory,
-// exit 4); a pipe or a device in place of an image is refused before it is opened (a FIFO
+// A PNG whose header claims more pixels than any machine's memory holds as floats (CRC fixed)
+// is refused before the pixels are allocated from it (65536 x 65536 had run the machine out
+// of memory, exit 4); a pipe or a device in place of an image is refused before it is opened (a FIFO
 // had blocked the reader).
 TEST(ImageIo, HeadersThatClaimTooMuchAndNonFilesAreRefused) {
   test::TempDir dir;
   write_image(Image(16, 16, 3, 0.5f), dir / "small.png", PixelFormat::uint8);
   std::string png = test::read_text(dir / "small.png");
   ASSERT_EQ(png.substr(12, 4), "IHDR");
-  for (size_t i : {16u, 20u}) png.replace(i, 4, std::string("\x00\x01\x00\x00", 4));  // width, height 65536
+  for (size_t i : {16u, 20u}) png.replace(i, 4, std::string("\x00\x0F\x42\x40", 4));  // width, height 1,000,000: 12 TB as floats
   uint32_t crc = 0xFFFFFFFFu;  // CRC-32 of the chunk's type and data (PNG's, reflected 0xEDB88320)
   for (size_t i = 12; i < 12 + 4 + 13; ++i) {
     crc ^= static_cast<unsigned char>(png[i]);
@@ -279,7 +279,8 @@ TEST(ImageIo, HeadersThatClaimTooMuchAndNonFilesAreRefused) {
     read_image(dir / "huge.png");
     ADD_FAILURE() << "read";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("huge.png: its header claims 65536 x 65536 pixels of 3 channels, more than its"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("huge.png: its header claims 1000000 x 1000000 pixels of 3 channels: 12000.0 GB as floats, more than this machine's"),
+              std::string::npos)
         << e.what();
   }
   const std::filesystem::path fifo = dir / "fifo.exr";

@@ -331,8 +331,10 @@ ObjScan check_obj_lines(const std::string& text, const std::string& name) {
       const bool parsed = ec == std::errc() && (ptr == q || *ptr == '/');
       if (!parsed) {
         const char* index_end = static_cast<const char*>(std::memchr(a, '/', static_cast<size_t>(q - a)));
+        const bool too_large = ec == std::errc::result_out_of_range && (ptr == q || *ptr == '/');
         throw InputError(name, where() + ": face corner '" + shown_token(token) + "': its texture coordinate index '" +
-                                   shown_token(std::string_view(a, static_cast<size_t>((index_end ? index_end : q) - a))) + "' is not an integer");
+                                   shown_token(std::string_view(a, static_cast<size_t>((index_end ? index_end : q) - a))) +
+                                   (too_large ? "' is out of range" : "' is not an integer"));
       }
       if (index == 0 || (index < 0 && texcoords + index < 0))
         throw InputError(name, where() + ": face corner '" + shown_token(token) + "' names texture coordinate " +

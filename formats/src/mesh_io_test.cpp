@@ -438,6 +438,7 @@ TEST(MeshIo, ObjTextureCoordinatesAreCheckedNotRepaired) {
       // A damaged index, and a control byte shown (a byte flipped in a file: the message had
       // said "names texture coordinate 16, but the file has 324 before it").
       {"junk.obj", quad + "vt 0 0\nvt 1 0\nvt 1 1\nf 1/1 2/2J 3/3\n", "line 8: face corner '2/2J': its texture coordinate index '2J' is not an integer"},
+      {"huge.obj", quad + "vt 0 0\nvt 1 0\nvt 1 1\nf 1/1 2/99999999999999999999 3/3\n", "line 8: face corner '2/99999999999999999999': its texture coordinate index '99999999999999999999' is out of range"},
       {"ctrl.obj", "v 0 0 0\nv 1 0 0.\x03" "5\nv 1 1 0\nf 1 2 3\n", "line 2: vertex coordinate '0.\\x035' is not a finite number"},
       // A file cut inside its last face: assimp had read it without that face, exit 0.
       {"cutf.obj", quad + "f 1 2 3\nf \n", "line 6: a face needs at least three vertices"},

@@ -65,9 +65,18 @@ std::string height_mapping_problem(const ImageMetadata& metadata) {
   return "";
 }
 
+namespace {
+// The map's recorded mapping to object units (object = bias + scale * value), when usable.
+bool recorded_mapping(const ImageMetadata& metadata, float& scale, float& bias) {
+  scale = metadata_number(metadata, "height_scale");
+  bias = metadata_number(metadata, "height_bias");
+  return std::isfinite(scale) && std::isfinite(bias) && scale >= 0;
+}
+}  // namespace
+
 Image heights_in_object_units(Image image) {
-  const float scale = metadata_number(image.metadata, "height_scale"), bias = metadata_number(image.metadata, "height_bias");
-  if (!(std::isfinite(scale) && std::isfinite(bias) && scale >= 0)) return image;
+  float scale = 0, bias = 0;
+  if (!recorded_mapping(image.metadata, scale, bias)) return image;
   for (size_t i = 0; i < image.pixels.size(); i += static_cast<size_t>(image.channels)) image.pixels[i] = bias + scale * image.pixels[i];
   image.metadata.erase("height_scale");
   image.metadata.erase("height_bias");
@@ -81,8 +90,8 @@ HeightField make_height_field(const Image& image, Border border) {
   // A map that records its own mapping to object units (bake's displacement.png, a stream)
   // holds bias + scale * value: taken back to object units first, so that its stream has the
   // height range of the displacement.exr it came from.
-  const float in_scale = metadata_number(image.metadata, "height_scale"), in_bias = metadata_number(image.metadata, "height_bias");
-  const bool mapped = std::isfinite(in_scale) && std::isfinite(in_bias) && in_scale >= 0;
+  float in_scale = 0, in_bias = 0;
+  const bool mapped = recorded_mapping(image.metadata, in_scale, in_bias);  // as heights_in_object_units
   const auto value = [&](size_t i) {
     const float v = image.pixels[i * static_cast<size_t>(image.channels)];
     return mapped ? in_bias + in_scale * v : v;

@@ -152,6 +152,7 @@ UvCheckReport check_uv_mapping(const Mesh& mesh, const UvCheckOptions& o) {
     });
   };
 
+  std::vector<uint8_t> degenerate(mesh.n_faces(), 0);
   for (auto f : mesh.faces()) {
     bool outside = false;
     for (auto h : face_halfedges(mesh, f)) {
@@ -163,6 +164,7 @@ UvCheckReport check_uv_mapping(const Mesh& mesh, const UvCheckOptions& o) {
     // size (a sliver 1e-20 high in v had touched no texel without being reported).
     if (uv_double_area(mesh, f) == 0.0 || degenerate_in_pixels(uv_triangle_in_pixels(mesh, f, o.size, o.size))) {
       r.degenerate_faces.push_back(f.idx());
+      degenerate[static_cast<size_t>(f.idx())] = 1;
       continue;
     }
     const int c = chart[static_cast<size_t>(f.idx())];
@@ -176,7 +178,7 @@ UvCheckReport check_uv_mapping(const Mesh& mesh, const UvCheckOptions& o) {
     });
   }
   for (auto f : mesh.faces()) {
-    if (uv_double_area(mesh, f) == 0.0) continue;
+    if (degenerate[static_cast<size_t>(f.idx())]) continue;
     bool shares = false;
     for_each_touched(f, [&](size_t i) { shares |= shared[i] != 0; });
     if (shares) r.shared_texel_faces.push_back(f.idx());
