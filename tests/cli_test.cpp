@@ -2026,12 +2026,13 @@ TEST(CliPreview, MapsAreReadAsTheirMetadataSays) {
     }
   normalised.metadata = {{"height_scale", 2.0f / 64.0f}, {"height_bias", 0.25f}};
   down.metadata = {{"quantity", std::string("normal")}, {"normal_y", std::string("down")}};
-  fs::create_directories(d / "plain");
-  fs::create_directories(d / "tagged");
-  write_image(height, d / "plain" / "displacement.exr", PixelFormat::float32);
-  write_image(up, d / "plain" / "normal_ts.png", PixelFormat::uint8);
-  write_image(normalised, d / "tagged" / "displacement.exr", PixelFormat::float32);
-  write_image(down, d / "tagged" / "normal_ts.png", PixelFormat::uint8);
+  auto write_maps = [&](const std::string& maps, const Image& displacement, const Image& normals) {
+    fs::create_directories(d / maps);
+    write_image(displacement, d / maps / "displacement.exr", PixelFormat::float32);
+    write_image(normals, d / maps / "normal_ts.png", PixelFormat::uint8);
+  };
+  write_maps("plain", height, up);
+  write_maps("tagged", normalised, down);
   auto render = [&](const std::string& maps) {
     const fs::path png = d / (maps + ".png");
     const Result r = run("preview " + (d / "base.obj").string() + " --maps " + (d / maps).string() +
@@ -2046,12 +2047,8 @@ TEST(CliPreview, MapsAreReadAsTheirMetadataSays) {
   Image cone = height, object_space = up;
   cone.metadata = {{"quantity", std::string("cone map")}};
   object_space.metadata = {{"quantity", std::string("normal")}, {"space", std::string("object")}};
-  fs::create_directories(d / "wrong_height");
-  fs::create_directories(d / "wrong_normals");
-  write_image(cone, d / "wrong_height" / "displacement.exr", PixelFormat::float32);
-  write_image(up, d / "wrong_height" / "normal_ts.png", PixelFormat::uint8);
-  write_image(height, d / "wrong_normals" / "displacement.exr", PixelFormat::float32);
-  write_image(object_space, d / "wrong_normals" / "normal_ts.png", PixelFormat::uint8);
+  write_maps("wrong_height", cone, up);
+  write_maps("wrong_normals", height, object_space);
   for (const auto& [maps, message] : {std::pair<std::string, std::string>{"wrong_height", "displacement.exr: holds a cone map"},
                                       {"wrong_normals", "normal_ts.png: is an object-space normal map"}}) {
     const Result r = run("preview " + (d / "base.obj").string() + " --maps " + (d / maps).string() +
