@@ -56,7 +56,8 @@ struct ChartSet {
 // writes one of them, which one depends on the face order), so the verdict does not depend
 // on the faces' order. Per level, each level-k texel is visited once: the charts that read it
 // (those touching a level-0 texel within one level-k texel of it) against the charts whose
-// values it holds; about 10 level-0 reads per texel and level, and no list of hits.
+// values it holds: two reads of every level-0 texel per level, ten more for the level-k
+// texels near another chart, and no list of hits.
 void check_mip_levels(const std::vector<int>& touch, const MoreCharts& more, int size, int levels, UvCheckReport& r) {
   if (levels > 14 || size % (1 << levels) != 0)
     throw std::invalid_argument("mip_safe " + std::to_string(levels) + " needs a size that is a multiple of 2^" + std::to_string(levels));
