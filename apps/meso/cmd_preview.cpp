@@ -4,7 +4,6 @@
 #include "meso/formats/atomic_file.hpp"
 #include "meso/formats/image_io.hpp"
 #include "meso/preview/preview.hpp"
-#include "meso/streams/height_field.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -53,44 +52,6 @@ void write_frame(Image frame, const std::filesystem::path& temp, PreviewShade sh
     frame.metadata["height_units"] = std::string("object = bias + scale * R");
   }
   write_image(frame, temp, PixelFormat::uint8);
-}
-
-// A text attribute of a map (meso:quantity, meso:normal_y, ...), or "" (a map from elsewhere).
-std::string text_attribute(const Image& map, const char* key) {
-  const auto it = map.metadata.find(key);
-  const std::string* v = it == map.metadata.end() ? nullptr : std::get_if<std::string>(&it->second);
-  return v ? *v : std::string();
-}
-
-// displacement.exr in object units. A map that records its mapping to object units (bake's
-// displacement.png converted to EXR keeps meso:height_scale and meso:height_bias) is taken
-// back through it, as `meso streams` reads it, so the previewer and the streams see one
-// relief. Another meso map under this name (a stream, a normal map) is refused.
-Image read_displacement(const std::filesystem::path& file) {
-  Image map = read_image(file);
-  const std::string quantity = text_attribute(map, "quantity");
-  if (!quantity.empty() && quantity != "displacement")
-    throw InputError(file.string(), "holds a " + quantity + " (meso:quantity), not a displacement map");
-  const std::string mapping = height_mapping_problem(map.metadata);
-  if (!mapping.empty()) throw InputError(file.string(), mapping);
-  return heights_in_object_units(std::move(map));
-}
-
-// normal_ts.png as the previewer's shaders take it: green up (OpenGL, +y = +v). A map baked
-// with --normal-y down (meso:normal_y "down") has its green turned back; an object-space or
-// another quantity's map is refused.
-Image read_tangent_normals(const std::filesystem::path& file) {
-  Image map = read_image(file);
-  if (map.channels < 3) throw InputError(file.string(), "needs 3 channels (a tangent-space normal map)");
-  const std::string quantity = text_attribute(map, "quantity");
-  if (!quantity.empty() && quantity != "normal")
-    throw InputError(file.string(), "holds a " + quantity + " (meso:quantity), not a tangent-space normal map");
-  if (text_attribute(map, "space").rfind("object", 0) == 0) throw InputError(file.string(), "is an object-space normal map; the previewer needs bake's normal_ts");
-  const std::string y = text_attribute(map, "normal_y");
-  if (!y.empty() && y != "up" && y != "down") throw InputError(file.string(), "its meso:normal_y is '" + y + "' (up or down)");
-  if (y == "down")  // stored as (n + 1) / 2: n.y -> -n.y is c -> 1 - c
-    for (size_t i = 1; i < map.pixels.size(); i += static_cast<size_t>(map.channels)) map.pixels[i] = 1.0f - map.pixels[i];
-  return map;
 }
 
 // --compare: the reference, every method against it, the heatmaps, the report (and a table on
@@ -306,22 +267,7 @@ void add_preview(CLI::App& app, Context& ctx) {
         // 94 bytes per pixel (the reference's images and the GPU's frames).
         refuse_beyond_memory("preview --compare at --size " + args->size, 94.0 * o.width * o.height);
       }
-      maps.displacement = read_displacement(dir / "displacement.exr");
-      if (maps.displacement.channels > 1) {
-        // Channel 0 is the height, as for the streams (a G of 1e20 had set the height range
-        // and emptied the frame).
-        Image height(maps.displacement.width, maps.displacement.height, 1);
-        for (size_t i = 0; i < height.pixels.size(); ++i) height.pixels[i] = maps.displacement.pixels[i * static_cast<size_t>(maps.displacement.channels)];
-        height.metadata = std::move(maps.displacement.metadata);
-        maps.displacement = std::move(height);
-      }
-      if (!maps.displacement.pixels.empty()) {
-        // Finite heights whose span is not (e.g. -3e38 and 3e38) cannot be normalised in
-        // float: the streams refuse such a map, and so does the previewer.
-        const auto [lo, hi] = std::minmax_element(maps.displacement.pixels.begin(), maps.displacement.pixels.end());
-        if (!std::isfinite(*hi - *lo)) throw InputError((dir / "displacement.exr").string(), "its heights span more than the float range; rescale the map");
-      }
-      maps.normal_ts = read_tangent_normals(dir / "normal_ts.png");
+      load_bake_maps(maps, dir);
       // Streams: those the method needs must be there; in a window, any that are there are
       // loaded so that every method can be switched to.
       for (const std::string& method : preview_methods()) {

@@ -5,6 +5,7 @@
 #include "meso/bake/curvature.hpp"
 #include "meso/core/mesh_arrays.hpp"
 #include "meso/formats/image_io.hpp"
+#include "meso/streams/height_field.hpp"
 #include "meso/streams/pyramid.hpp"
 #include "meso/streams/vdm.hpp"
 #include "sampling.hpp"
@@ -235,6 +236,62 @@ void clear_stream(PreviewMaps& maps, const std::string& method) {
   if (method == "vdm") maps.vdm_weights = maps.vdm_basis = Image();
   if (method == "dstream") maps.dstream = EncodedStream();
   if (Image* image = image_stream(maps, method)) *image = Image();
+}
+
+namespace {
+// displacement.exr in object units. A map that records its mapping to object units (bake's
+// displacement.png converted to EXR keeps meso:height_scale and meso:height_bias) is taken
+// back through it, as `meso streams` reads it, so the previewer and the streams see one
+// relief. Another meso map under this name (a stream, a normal map) is refused.
+Image read_displacement(const std::filesystem::path& file) {
+  Image map = read_image(file);
+  const std::string quantity = string_attribute(map, "quantity");
+  if (!quantity.empty() && quantity != "displacement")
+    throw InputError(file.string(), "holds a " + quantity + " (meso:quantity), not a displacement map");
+  const std::string mapping = height_mapping_problem(map.metadata);
+  if (!mapping.empty()) throw InputError(file.string(), mapping);
+  return heights_in_object_units(std::move(map));
+}
+
+// normal_ts.png as the previewer's shaders take it: green up (OpenGL, +y = +v). A map baked
+// with --normal-y down (meso:normal_y "down") has its green turned back; an object-space or
+// another quantity's map is refused.
+Image read_tangent_normals(const std::filesystem::path& file) {
+  Image map = read_image(file);
+  if (map.channels < 3) throw InputError(file.string(), "needs 3 channels (a tangent-space normal map)");
+  const std::string quantity = string_attribute(map, "quantity");
+  if (!quantity.empty() && quantity != "normal")
+    throw InputError(file.string(), "holds a " + quantity + " (meso:quantity), not a tangent-space normal map");
+  if (string_attribute(map, "space").rfind("object", 0) == 0) throw InputError(file.string(), "is an object-space normal map; the previewer needs bake's normal_ts");
+  const std::string y = string_attribute(map, "normal_y");
+  if (!y.empty() && y != "up" && y != "down") throw InputError(file.string(), "its meso:normal_y is '" + y + "' (up or down)");
+  if (y == "down")  // stored as (n + 1) / 2: n.y -> -n.y is c -> 1 - c
+    for (size_t i = 1; i < map.pixels.size(); i += static_cast<size_t>(map.channels)) map.pixels[i] = 1.0f - map.pixels[i];
+  return map;
+}
+
+}  // namespace
+
+void load_bake_maps(PreviewMaps& maps, const std::filesystem::path& dir) {
+  const std::filesystem::path height_file = dir / "displacement.exr";
+  Image displacement = read_displacement(height_file);
+  if (displacement.channels > 1) {
+    // Channel 0 is the height, as for the streams (a G of 1e20 had set the height range and
+    // emptied the frame).
+    Image height(displacement.width, displacement.height, 1);
+    for (size_t i = 0; i < height.pixels.size(); ++i) height.pixels[i] = displacement.pixels[i * static_cast<size_t>(displacement.channels)];
+    height.metadata = std::move(displacement.metadata);
+    displacement = std::move(height);
+  }
+  if (!displacement.pixels.empty()) {
+    // Finite heights whose span is not (e.g. -3e38 and 3e38) cannot be normalised in float:
+    // the streams refuse such a map, and so does the previewer.
+    const auto [lo, hi] = std::minmax_element(displacement.pixels.begin(), displacement.pixels.end());
+    if (!std::isfinite(*hi - *lo)) throw InputError(height_file.string(), "its heights span more than the float range; rescale the map");
+  }
+  Image normals = read_tangent_normals(dir / "normal_ts.png");
+  maps.displacement = std::move(displacement);
+  maps.normal_ts = std::move(normals);
 }
 
 void load_stream(PreviewMaps& maps, const Mesh& base, const std::string& method, const std::filesystem::path& file) {

@@ -41,6 +41,14 @@ struct PreviewMaps {
   EncodedStream dstream;
 };
 
+// Reads bake's maps from `dir` into maps.displacement (DIR/displacement.exr, channel 0, in
+// object units: through its own meso:height_scale/meso:height_bias when it records them, as
+// `meso streams` reads a height map) and maps.normal_ts (DIR/normal_ts.png, green up: a map
+// baked with --normal-y down is turned back). Throws InputError naming the file when one is
+// missing or unreadable, holds another meso:quantity, is an object-space normal map, or has
+// heights whose span exceeds the float range.
+void load_bake_maps(PreviewMaps& maps, const std::filesystem::path& dir);
+
 // The stream file a method needs in --streams DIR ("sdf.exr", "cone.exr",
 // "relaxed-cone.exr", "pyramid.exr", "vdm.exr", "dstream.bin"), or "" for none.
 std::string required_stream(const std::string& method);
