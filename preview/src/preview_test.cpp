@@ -362,6 +362,22 @@ TEST(Preview, MethodsNeedTheirStreams) {
   Image two(sdf.width, sdf.height, 2, 0.0f);
   two.metadata = sdf.metadata;
   expect_refused([&] { check_sdf_matches(two, maps.displacement, "sdf.exr"); }, "sdf.exr: needs 1 channel");
+  // Streams of another height map with the same range (this ramp mirrored: the same values,
+  // so check_height_range passes) are refused at the first texel whose height differs; the
+  // mirror's own streams match the mirror.
+  Image mirrored = maps.displacement;
+  for (int y = 0; y < mirrored.height; ++y)
+    for (int x = 0; x < mirrored.width; ++x) mirrored.at(x, y) = maps.displacement.at(mirrored.width - 1 - x, y);
+  const HeightField mirror = make_height_field(mirrored, Border::clamp);
+  const Image mirror_cone = build_cone_map(mirror, ConeMapOptions{}), mirror_pyramid = pyramid_image(mirror);
+  const Image mirror_sdf = distance_field_image(build_distance_field(mirror, DistanceFieldOptions{}), mirror);
+  const std::string differs = "the height at texel (0, 0) differs from displacement.exr's";
+  expect_refused([&] { check_cone_matches(mirror_cone, maps.displacement, "conservative", "cone.exr"); }, "cone.exr: " + differs);
+  expect_refused([&] { check_pyramid_matches(mirror_pyramid, maps.displacement, "pyramid.exr"); }, "pyramid.exr: " + differs);
+  expect_refused([&] { check_sdf_matches(mirror_sdf, maps.displacement, "sdf.exr"); }, "sdf.exr: " + differs);
+  EXPECT_NO_THROW(check_cone_matches(mirror_cone, mirrored, "conservative", "cone.exr"));
+  EXPECT_NO_THROW(check_pyramid_matches(mirror_pyramid, mirrored, "pyramid.exr"));
+  EXPECT_NO_THROW(check_sdf_matches(mirror_sdf, mirrored, "sdf.exr"));
   maps.cone = Image();
   EXPECT_THROW(render_headless(quad, maps, centre_uv_options("cone", 30.0f)), UsageError);
 }

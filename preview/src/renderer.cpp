@@ -78,6 +78,34 @@ void check_height_range(const Image& stream, const Image& displacement, const st
     throw InputError(name, "was made from another height map (its height range differs from displacement.exr's)");
 }
 
+// A stream made from another height map with the same range passes check_height_range: its
+// own heights must also be this map's, normalised with the stream's range. `holds(texel, x,
+// y, h)` says whether the stream's texel (x, y) of level 0 fits the displacement, whose
+// normalised heights h(x', y') it may read around (x, y), clamped to the map. The tolerance
+// covers what quantisation between the two files can change: --half heights (at most 2^-12
+// near 1) and streams made from bake's 8-bit displacement.png (1/510); a height map that
+// differs by more than 1/256 of the range at some texel is another map.
+constexpr float kStreamHeightTolerance = 1.0f / 256.0f;
+template <typename Holds>
+void check_stream_heights(const Image& stream, const Image& displacement, const std::string& name, const char* producer, Holds holds) {
+  const float bias = stream_number(stream, "height_bias", name, producer), scale = stream_number(stream, "height_scale", name, producer);
+  const int w = displacement.width, hgt = displacement.height;
+  std::vector<float> normalised(displacement.texel_count());
+  for (size_t i = 0; i < normalised.size(); ++i) {
+    const float d = displacement.pixels[i * static_cast<size_t>(displacement.channels)];
+    normalised[i] = scale > 0 ? std::clamp((d - bias) / scale, 0.0f, 1.0f) : 0.0f;
+  }
+  auto h = [&](int x, int y) {
+    return normalised[static_cast<size_t>(std::clamp(y, 0, hgt - 1)) * static_cast<size_t>(w) + static_cast<size_t>(std::clamp(x, 0, w - 1))];
+  };
+  const size_t channels = static_cast<size_t>(stream.channels);
+  for (int y = 0; y < hgt; ++y)
+    for (int x = 0; x < w; ++x)
+      if (!holds(&stream.pixels[(static_cast<size_t>(y) * static_cast<size_t>(w) + static_cast<size_t>(x)) * channels], x, y, h))
+        throw InputError(name, "the height at texel (" + std::to_string(x) + ", " + std::to_string(y) +
+                                   ") differs from displacement.exr's (made from another height map?)");
+}
+
 std::string string_attribute(const Image& img, const char* key) {
   const auto it = img.metadata.find(key);
   if (it == img.metadata.end()) return "";
@@ -113,6 +141,29 @@ void check_sdf_matches(const Image& sdf, const Image& displacement, const std::s
   if (!(stream_number(sdf, "relief", name) > 0)) throw InputError(name, "its meso:relief is not a height range > 0");
   check_stream_values(sdf, name, "a distance field's values (distances >= 0)", [](const float* v) { return v[0] >= 0; });
   check_height_range(sdf, displacement, name, "meso streams sdf");
+  // Per column (x, y): voxels whose centre lies below the texel's own height are inside the
+  // solid (distance 0), since the texel's footprint maximum (the solid's top there) is at
+  // least that height; those above the maximum of the 3 x 3 texels around it (which bounds
+  // the filtered surface over the footprint, read as meso:border says) are outside, at least
+  // min(1/2 texel, their height above it) away, which is checked where that stays above
+  // half's smallest normal number (a --half file rounds distances down).
+  const int w = sdf.width, rows = displacement.height;
+  const float relief = stream_number(sdf, "relief", name);
+  const bool wrap = string_attribute(sdf, "border") == "wrap";
+  check_stream_heights(sdf, displacement, name, "meso streams sdf", [&](const float*, int x, int y, auto h) {
+    float top = 0.0f;
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) top = std::max(top, wrap ? h((x + dx + w) % w, (y + dy + rows) % rows) : h(x + dx, y + dy));
+    for (int k = 0; k < depth; ++k) {
+      const float z = (static_cast<float>(k) + 0.5f) / static_cast<float>(depth);
+      const float d = sdf.pixels[(static_cast<size_t>(k) * static_cast<size_t>(rows) + static_cast<size_t>(y)) * static_cast<size_t>(w) +
+                                 static_cast<size_t>(x)];
+      if (z < h(x, y) - kStreamHeightTolerance && d != 0.0f) return false;
+      const float away = std::min(0.5f / static_cast<float>(w), (z - top - kStreamHeightTolerance) * relief);
+      if (away > 6.2e-5f && !(d > 0.0f)) return false;
+    }
+    return true;
+  });
 }
 
 void check_cone_matches(const Image& cone, const Image& displacement, const std::string& kind, const std::string& name) {
@@ -131,6 +182,9 @@ void check_cone_matches(const Image& cone, const Image& displacement, const std:
   check_stream_values(cone, name, "a cone map's values (height in [0, 1], ratio in [0, meso:ratio_cap], apex >= height)",
                       [cap](const float* v) { return v[0] >= 0 && v[0] <= 1 && v[1] >= 0 && v[1] <= cap && v[2] >= v[0]; });
   check_height_range(cone, displacement, name, producer);
+  // R is the texel's normalised height (the surface the cone methods trace).
+  check_stream_heights(cone, displacement, name, producer,
+                       [](const float* v, int x, int y, auto h) { return std::abs(v[0] - h(x, y)) <= kStreamHeightTolerance; });
 }
 
 void check_pyramid_matches(const Image& pyramid, const Image& displacement, const std::string& name) {
@@ -140,6 +194,10 @@ void check_pyramid_matches(const Image& pyramid, const Image& displacement, cons
   check_stream_values(pyramid, name, "a min-max pyramid's values (0 <= min <= max <= 1)",
                       [](const float* v) { return v[0] >= 0 && v[0] <= v[1] && v[1] <= 1; });
   check_height_range(pyramid, displacement, name, "meso streams pyramid");
+  // Level 0 holds the extremes over each texel's footprint, which contains its centre.
+  check_stream_heights(pyramid, displacement, name, "meso streams pyramid", [](const float* v, int x, int y, auto h) {
+    return v[0] <= h(x, y) + kStreamHeightTolerance && v[1] >= h(x, y) - kStreamHeightTolerance;
+  });
 }
 
 void check_stream_matches(const std::string& method, const Image& stream, const Image& displacement, const std::string& name) {
