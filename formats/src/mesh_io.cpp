@@ -537,17 +537,40 @@ void check_ply(const std::string& text, const std::string& name) {
 // coordinates stored as normalised integers, which core glTF allows for texture coordinates
 // (it takes their bytes for floats: UVs of 9e-41, or NaN). Extensions of materials, textures
 // and lights leave the geometry as it is and are let through. JSON that does not parse is
-// refused here too, saying where (assimp said only "No suitable reader found"); a binary
-// glTF without a JSON chunk is left to assimp, which says what is wrong.
+// refused here too, saying where (assimp said only "No suitable reader found"), and so is a
+// binary glTF 2.0 whose header or chunks run past the end of the file (a download or copy
+// cut short; assimp said the same). glTF 1.0's binary layout is left to assimp.
 void check_gltf(const std::string& text, const std::string& name) {
   std::string_view json = text;
   if (text.compare(0, 4, "glTF") == 0) {
-    // Binary glTF: a 12-byte header, then chunks of (length, type, data); the first is JSON.
-    if (text.size() < 20 || text.compare(16, 4, "JSON") != 0) return;
-    uint32_t length = 0;
-    std::memcpy(&length, text.data() + 12, 4);  // little-endian, as the machines meso runs on
-    if (length > text.size() - 20) return;
-    json = std::string_view(text.data() + 20, length);
+    // Binary glTF 2.0 (the spec's "GLB File Format Specification"): a 12-byte header (magic,
+    // version, total length), then chunks of (length, type, data), the first one JSON.
+    auto u32 = [&](size_t at) {
+      uint32_t v = 0;
+      std::memcpy(&v, text.data() + at, 4);  // little-endian, as the machines meso runs on
+      return v;
+    };
+    const std::string held = std::to_string(text.size()) + " bytes";
+    if (text.size() < 12) throw InputError(name, "is cut short: " + held + ", less than a binary glTF header (12)");
+    const uint32_t version = u32(4);
+    if (version == 1) return;
+    if (version != 2) throw InputError(name, "is binary glTF version " + std::to_string(version) + ", which meso cannot read (2 or 1)");
+    if (u32(8) > text.size())
+      throw InputError(name, "is cut short: its binary glTF header announces " + std::to_string(u32(8)) + " bytes, the file holds " + held);
+    if (text.size() < 20) throw InputError(name, "is cut short: " + held + ", no room for its JSON chunk");
+    if (text.compare(16, 4, "JSON") != 0) throw InputError(name, "its first binary glTF chunk is not JSON");
+    // The chunks within the announced length (bytes past it are not the glTF's).
+    const size_t end = u32(8);
+    if (end < 20) throw InputError(name, "its binary glTF header announces " + std::to_string(end) + " bytes, less than a header and a chunk");
+    for (size_t at = 12; at < end;) {
+      if (end - at < 8) throw InputError(name, "its binary glTF chunks end inside a chunk header (at byte " + std::to_string(at) + ")");
+      const uint32_t length = u32(at);
+      if (length > end - at - 8)
+        throw InputError(name, "is cut short: its binary glTF chunk at byte " + std::to_string(at) + " announces " + std::to_string(length) +
+                                   " bytes, " + std::to_string(end - at - 8) + " follow its header");
+      at += 8 + static_cast<size_t>(length);
+    }
+    json = std::string_view(text.data() + 20, u32(12));
   }
   nlohmann::json doc;
   try {

@@ -315,6 +315,29 @@ TEST(MeshIo, GarbageIsAnInputError) {
   }
 }
 
+// A binary glTF cut short (a download or copy interrupted) is named as such; assimp had said
+// "No suitable reader found for the file format". The whole file reads.
+TEST(MeshIo, CutShortGlbIsNamed) {
+  test::TempDir dir;
+  write_mesh(test::make_seamed_cube(), dir / "cube.glb");
+  const std::string bytes = test::read_text(dir / "cube.glb");
+  ASSERT_GT(bytes.size(), 100u);
+  EXPECT_EQ(read_mesh(dir / "cube.glb").n_faces(), test::make_seamed_cube().n_faces());
+  for (const auto& [size, message] : std::vector<std::pair<size_t, std::string>>{
+           {bytes.size() - 1, "is cut short: its binary glTF header announces " + std::to_string(bytes.size()) + " bytes, the file holds " +
+                                  std::to_string(bytes.size() - 1) + " bytes"},
+           {8, "is cut short: 8 bytes, less than a binary glTF header (12)"}}) {
+    test::write_text(dir / "cut.glb", bytes.substr(0, size));
+    expect_refused(dir / "cut.glb", (dir / "cut.glb").string() + ": " + message);
+  }
+  // The header's length lowered with the file: the JSON chunk now runs past the end.
+  std::string cut = bytes.substr(0, 40);
+  const uint32_t forty = 40;
+  std::memcpy(cut.data() + 8, &forty, 4);
+  test::write_text(dir / "cut.glb", cut);
+  expect_refused(dir / "cut.glb", (dir / "cut.glb").string() + ": is cut short: its binary glTF chunk at byte 12 announces");
+}
+
 // A PLY cut short after three of its nine vertices trips one of assimp's own assertions,
 // which aborted the process: it is an unreadable file like any other.
 TEST(MeshIo, TruncatedPlyIsAnInputErrorNotAnAbort) {
