@@ -145,6 +145,13 @@ TEST(Cli, UvpackPackMakesAUniqueMappingWithPadding) {
   EXPECT_EQ(nlohmann::json::parse(clamp.out)["border_margin"], 0);
   EXPECT_EQ(run("uvpack pack " + (dir / "cube.obj").string() + " -o " + (dir / "x.obj").string() + " --wrap --clamp").code, 2);
   EXPECT_FALSE(fs::exists(dir / "x.obj"));
+  // The checker measures across the border with --wrap: the default packing keeps the padding there.
+  const Result across = run("uvpack check " + (dir / "packed.obj").string() + " --size 128 --padding 3 --wrap --fail-on padding --report " +
+                            (dir / "wrap.json").string());
+  EXPECT_EQ(across.code, 0) << across.err;
+  std::ifstream wrap_report(dir / "wrap.json");
+  EXPECT_EQ(nlohmann::json::parse(wrap_report)["addressing"], "wrap");
+  EXPECT_EQ(run("uvpack check " + (dir / "packed.obj").string() + " --size 128 --wrap --clamp").code, 2);
   // (A mesh without UVs is unwrapped first: Cli.UvpackPackUnwrapsAMeshWithoutUvs.)
 }
 

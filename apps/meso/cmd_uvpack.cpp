@@ -69,6 +69,7 @@ void add_uvpack(CLI::App& app, Context& ctx) {
     int size = 1024;
     double padding = 0;
     int mip_safe = -1;
+    bool wrap = false, clamp = false;
     std::vector<std::string> fail_on;
   };
   auto args = std::make_shared<Args>();
@@ -81,6 +82,9 @@ void add_uvpack(CLI::App& app, Context& ctx) {
                     "Also check that no texel of MIP levels 0..K that a chart's bilinear lookups read holds another chart's values "
                     "(after the bake's dilation; box-filtered levels; --size a multiple of 2^K)")
       ->check(CLI::Range(0, 14));
+  auto* check_wrap = check->add_flag("--wrap", args->wrap,
+                                     "The texture is sampled with repeat addressing: padding and MIP reads are also checked across its borders");
+  check->add_flag("--clamp", args->clamp, "The texture is sampled with clamp-to-edge addressing (the default)")->excludes(check_wrap);
   check->add_option("-o,--overlay", args->overlay, "Overlay PNG (RGBA): red = shared texels, blue = used once")->check(ImageOutput);
   check->add_option("--report", args->report, "JSON report file");
   check->add_option("--fail-on", args->fail_on, "Exit 1 when any of these is found: overlap,shared,flipped,degenerate,outside,padding,mip")
@@ -98,6 +102,7 @@ void add_uvpack(CLI::App& app, Context& ctx) {
       o.padding = args->padding;
       o.overlay = !args->overlay.empty();
       o.mip_safe = args->mip_safe;
+      o.wrap = args->wrap;
       if (o.mip_safe >= 0 && o.size % (1 << o.mip_safe) != 0)
         throw UsageError("--mip-safe " + std::to_string(o.mip_safe) + " needs --size to be a multiple of " + std::to_string(1 << o.mip_safe));
       if (o.mip_safe < 0 && std::find(args->fail_on.begin(), args->fail_on.end(), "mip") != args->fail_on.end())
@@ -109,6 +114,7 @@ void add_uvpack(CLI::App& app, Context& ctx) {
                 {"input", in_report},
                 {"size", r.width},
                 {"padding", o.padding},
+                {"addressing", o.wrap ? "wrap" : "clamp"},
                 {"charts", r.charts},
                 {"overlapping_faces", r.overlapping_faces},
                 {"overlap_pairs", r.overlap_pairs},

@@ -58,7 +58,7 @@ struct ChartSet {
 // (those touching a level-0 texel within one level-k texel of it) against the charts whose
 // values it holds: two reads of every level-0 texel per level, ten more for the level-k
 // texels near another chart, and no list of hits.
-void check_mip_levels(const std::vector<int>& touch, const MoreCharts& more, int size, int levels, UvCheckReport& r) {
+void check_mip_levels(const std::vector<int>& touch, const MoreCharts& more, int size, int levels, bool wrap, UvCheckReport& r) {
   if (levels > 14 || size % (1 << levels) != 0)
     throw std::invalid_argument("mip_safe " + std::to_string(levels) + " needs a size that is a multiple of 2^" + std::to_string(levels));
   const size_t n = static_cast<size_t>(size) * static_cast<size_t>(size);
@@ -105,23 +105,36 @@ void check_mip_levels(const std::vector<int>& touch, const MoreCharts& more, int
         touched[c] = readers.items.empty() ? -1 : readers.items.size() == 1 ? readers.items[0] : kMixed;
         held[c] = holders.items.empty() ? -1 : holders.items.size() == 1 ? holders.items[0] : kMixed;
       }
+    // The level-k texels within one of (cx, cy) (its bilinear neighbours), cut at the
+    // borders (clamp) or wrapped around them (repeat); a tiny level may list one twice.
+    auto around = [&](int cx, int cy, auto&& fn) {
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          int nx = cx + dx, ny = cy + dy;
+          if (wrap) {
+            nx = (nx + cn) % cn;
+            ny = (ny + cn) % cn;
+          } else if (nx < 0 || ny < 0 || nx >= cn || ny >= cn) {
+            continue;
+          }
+          fn(nx, ny);
+        }
+    };
     counts.clear();
     for (int cy = 0; cy < cn; ++cy)
       for (int cx = 0; cx < cn; ++cx) {
         const int h = held[static_cast<size_t>(cy) * static_cast<size_t>(cn) + static_cast<size_t>(cx)];
         if (h == -1) continue;
         bool clean = h != kMixed;
-        for (int ny = std::max(0, cy - 1); clean && ny <= std::min(cn - 1, cy + 1); ++ny)
-          for (int nx = std::max(0, cx - 1); clean && nx <= std::min(cn - 1, cx + 1); ++nx) {
-            const int t = touched[static_cast<size_t>(ny) * static_cast<size_t>(cn) + static_cast<size_t>(nx)];
-            clean = t == -1 || t == h;
-          }
+        around(cx, cy, [&](int nx, int ny) {
+          const int t = touched[static_cast<size_t>(ny) * static_cast<size_t>(cn) + static_cast<size_t>(nx)];
+          clean &= t == -1 || t == h;
+        });
         if (clean) continue;
         holders.items.clear();
         holding(cx, cy, holders);
         readers.items.clear();
-        for (int ny = std::max(0, cy - 1); ny <= std::min(cn - 1, cy + 1); ++ny)
-          for (int nx = std::max(0, cx - 1); nx <= std::min(cn - 1, cx + 1); ++nx) touching(nx, ny, readers);
+        around(cx, cy, [&](int nx, int ny) { touching(nx, ny, readers); });
         for (int reader : readers.items)
           for (int other : holders.items) {
             if (other == reader) continue;
@@ -186,7 +199,7 @@ UvCheckReport check_uv_mapping(const Mesh& mesh, const UvCheckOptions& o) {
   }
 
   // Exact overlaps and padding.
-  UvOverlapReport exact = find_uv_overlaps(mesh, chart, o.size, o.padding);
+  UvOverlapReport exact = find_uv_overlaps(mesh, chart, o.size, o.padding, o.wrap);
   r.overlap_pairs = std::move(exact.overlap_pairs);
   r.padding_violations = std::move(exact.padding_violations);
   for (const auto& [a, b] : r.overlap_pairs) {
@@ -231,7 +244,7 @@ UvCheckReport check_uv_mapping(const Mesh& mesh, const UvCheckOptions& o) {
   double all_uv_area = 0;
   for (double a : uv_area) all_uv_area += a;
   r.utilization = n ? all_uv_area / static_cast<double>(n) : 0.0;
-  if (o.mip_safe >= 0) check_mip_levels(first_chart, more_charts, o.size, o.mip_safe, r);
+  if (o.mip_safe >= 0) check_mip_levels(first_chart, more_charts, o.size, o.mip_safe, o.wrap, r);
   return r;
 }
 

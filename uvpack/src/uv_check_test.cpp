@@ -236,6 +236,48 @@ TEST(UvCheck, MipCheckOfTwoChartsTwoTexelsApart) {
   EXPECT_EQ(touching.mip_violations.front().level, 0);
 }
 
+// Two 8 x 8-texel charts at opposite sides of a 64^2 texture, 48 texels apart inside it and
+// touching across its left/right border. Clamp-to-edge: nothing to report. Repeat (wrap):
+// the padding is broken (distance 0), and at level 0 each chart's lookups at its border
+// column read the other's border column in the charts' rows 8-15 and one more either side
+// (rows 7-16: those texels are dilated from the nearer chart, in the plane as the bake does):
+// 10 texels each way, nothing else.
+TEST(UvCheck, WrapMeasuresPaddingAndMipReadsAcrossTheBorder) {
+  const Mesh m = texel_quads({{0, 8, 8, 16}, {56, 64, 8, 16}}, 64);
+  UvCheckOptions o;
+  o.size = 64;
+  o.padding = 4;
+  o.overlay = false;
+  o.mip_safe = 0;
+  const UvCheckReport clamp = check_uv_mapping(m, o);
+  ASSERT_EQ(clamp.charts, 2u);
+  EXPECT_TRUE(clamp.padding_violations.empty());
+  EXPECT_TRUE(clamp.mip_violations.empty());
+  EXPECT_EQ(clamp.mip_safe_levels, 0);
+  o.wrap = true;
+  const UvCheckReport wrap = check_uv_mapping(m, o);
+  ASSERT_EQ(wrap.padding_violations.size(), 1u);
+  EXPECT_EQ(wrap.padding_violations[0].chart_a, 0);
+  EXPECT_EQ(wrap.padding_violations[0].chart_b, 1);
+  EXPECT_EQ(wrap.padding_violations[0].distance, 0.0);
+  EXPECT_TRUE(wrap.overlap_pairs.empty());
+  std::vector<std::tuple<int, int, int, size_t>> got;
+  for (const auto& v : wrap.mip_violations) got.emplace_back(v.level, v.chart, v.reads, v.texels);
+  EXPECT_EQ(got, (std::vector<std::tuple<int, int, int, size_t>>{{0, 0, 1, 10}, {0, 1, 0, 10}}));
+  EXPECT_EQ(wrap.mip_safe_levels, -1);
+  // 2 texels from each side: 4 apart across the border, as the padding asks; 3 apart is not.
+  o.mip_safe = -1;
+  EXPECT_TRUE(check_uv_mapping(texel_quads({{2, 10, 8, 16}, {54, 62, 8, 16}}, 64), o).padding_violations.empty());
+  const UvCheckReport three = check_uv_mapping(texel_quads({{1, 9, 8, 16}, {54, 62, 8, 16}}, 64), o);
+  ASSERT_EQ(three.padding_violations.size(), 1u);
+  EXPECT_NEAR(three.padding_violations[0].distance, 3.0, 1e-4);
+  // One chart across the whole width meets itself across the border: the pair (0, 0).
+  const UvCheckReport wide = check_uv_mapping(texel_quads({{0, 64, 8, 16}}, 64), o);
+  ASSERT_EQ(wide.padding_violations.size(), 1u);
+  EXPECT_EQ(wide.padding_violations[0].chart_a, 0);
+  EXPECT_EQ(wide.padding_violations[0].chart_b, 0);
+}
+
 // A small chart inside one texel of another: both charts touch that texel, both read around
 // it, and the texel holds both (which one the bake writes depends on the face order). The
 // verdict and the violations must not depend on which chart comes first in the file (they

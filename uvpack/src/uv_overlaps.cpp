@@ -76,11 +76,15 @@ double triangle_distance(const std::array<Point, 3>& a, const std::array<Point, 
 
 }  // namespace
 
-UvOverlapReport find_uv_overlaps(const Mesh& mesh, const std::vector<int>& chart, int size, double padding_texels) {
+UvOverlapReport find_uv_overlaps(const Mesh& mesh, const std::vector<int>& chart, int size, double padding_texels, bool wrap) {
   UvOverlapReport r;
   std::vector<std::array<Point, 3>> tri(mesh.n_faces());
+  // Each box is a face, as stored or (wrap) moved by a whole texture: `copies` holds
+  // (face, shift), shift 4 = (0, 0), else 3 (dv + 1) + (du + 1).
   std::vector<Box> boxes;
+  std::vector<std::pair<int, int>> copies;
   boxes.reserve(mesh.n_faces());
+  constexpr int kUnmoved = 4;
   // Boxes grown by half the padding (in UV units), so charts closer than it meet.
   const double grow = padding_texels > 0 ? 0.5 * padding_texels / size : 0.0;
   for (auto f : mesh.faces()) {
@@ -88,18 +92,35 @@ UvOverlapReport find_uv_overlaps(const Mesh& mesh, const std::vector<int>& chart
     const size_t i = static_cast<size_t>(f.idx());
     tri[i] = uv_points(mesh, f);
     const CGAL::Bbox_2 b = tri[i][0].bbox() + tri[i][1].bbox() + tri[i][2].bbox();
-    boxes.emplace_back(CGAL::Bbox_2(b.xmin() - grow, b.ymin() - grow, b.xmax() + grow, b.ymax() + grow), f.idx());
+    for (int shift = 0; shift < 9; ++shift) {
+      if (shift != kUnmoved && !(wrap && padding_texels > 0)) continue;
+      const double du = shift % 3 - 1, dv = shift / 3 - 1;
+      const CGAL::Bbox_2 moved(b.xmin() + du - grow, b.ymin() + dv - grow, b.xmax() + du + grow, b.ymax() + dv + grow);
+      // A moved copy only matters where it comes near the texture (where the faces are).
+      if (shift != kUnmoved && (moved.xmax() < -grow || moved.xmin() > 1 + grow || moved.ymax() < -grow || moved.ymin() > 1 + grow))
+        continue;
+      boxes.emplace_back(moved, static_cast<int>(copies.size()));
+      copies.emplace_back(f.idx(), shift);
+    }
   }
   std::map<std::pair<int, int>, double> gaps;
   CGAL::box_self_intersection_d(boxes.begin(), boxes.end(), [&](const Box& ba, const Box& bb) {
-    int fa = ba.info(), fb = bb.info();
-    if (fa > fb) std::swap(fa, fb);
+    auto [fa, sa] = copies[static_cast<size_t>(ba.info())];
+    auto [fb, sb] = copies[static_cast<size_t>(bb.info())];
+    // Pairs of two moved copies are the pair of one unmoved face and the other moved by the
+    // difference, which comes in on its own where it is near the texture.
+    if (sa != kUnmoved && sb != kUnmoved) return;
+    if (sa != kUnmoved) std::swap(fa, fb), std::swap(sa, sb);  // fb the moved one, if any
+    const bool across = sb != kUnmoved;
+    if (!across && fa > fb) std::swap(fa, fb);
     const auto& ta = tri[static_cast<size_t>(fa)];
-    const auto& tb = tri[static_cast<size_t>(fb)];
+    std::array<Point, 3> tb = tri[static_cast<size_t>(fb)];
+    if (across)
+      for (Point& p : tb) p = Point(p.x() + (sb % 3 - 1), p.y() + (sb / 3 - 1));  // exact: UVs are floats, shifts small integers
     const bool overlap = interiors_overlap(ta, tb);
-    if (overlap) r.overlap_pairs.emplace_back(fa, fb);
+    if (overlap && !across) r.overlap_pairs.emplace_back(fa, fb);
     int ca = chart[static_cast<size_t>(fa)], cb = chart[static_cast<size_t>(fb)];
-    if (padding_texels <= 0 || ca == cb) return;
+    if (padding_texels <= 0 || (ca == cb && !across)) return;
     const double d = overlap ? 0.0 : triangle_distance(ta, tb, size);
     if (d >= padding_texels) return;
     if (ca > cb) std::swap(ca, cb);

@@ -20,11 +20,12 @@ namespace meso {
 namespace {
 
 // The checker's verdict on a packed mesh at the packing's size and padding (no overlay).
-UvCheckReport check_packed(const Mesh& m, int size, int padding) {
+UvCheckReport check_packed(const Mesh& m, int size, int padding, bool wrap = false) {
   UvCheckOptions check;
   check.size = size;
   check.padding = padding;
   check.overlay = false;
+  check.wrap = wrap;
   return check_uv_mapping(m, check);
 }
 
@@ -350,6 +351,9 @@ TEST(UvPack, BorderMarginFollowsTheAddressing) {
         EXPECT_TRUE(c.padding_violations.empty());
         EXPECT_TRUE(c.outside_faces.empty());
       }
+      // The checker's wrap agrees: charts packed for repeat addressing keep the padding
+      // across the border too.
+      EXPECT_TRUE(check_packed(wrapped, o.size, padding, true).padding_violations.empty()) << size << " " << padding;
       if (input.n_faces() == 2) {
         // One square chart: it spans the atlas less the two margins, or the whole atlas.
         EXPECT_EQ(bw[0], margin);
@@ -360,6 +364,10 @@ TEST(UvPack, BorderMarginFollowsTheAddressing) {
         // One chart is packed at the largest scale its box fits (less the 1/64-texel inset).
         EXPECT_NEAR(rw.utilization, side * side, 1e-3) << padding;
         EXPECT_NEAR(rc.utilization, 1.0, 1e-3) << padding;
+        // Packed for clamp, the chart fills the atlas and meets itself across the border.
+        const UvCheckReport across = check_packed(clamped, o.size, padding, true);
+        ASSERT_EQ(across.padding_violations.size(), 1u);
+        EXPECT_EQ(across.padding_violations[0].chart_a, across.padding_violations[0].chart_b);
         EXPECT_LE(rw.attempts, 4);
       } else {
         EXPECT_GE(rc.utilization, rw.utilization * 0.99) << "clamp has more room (the greedy packing is not monotone)";

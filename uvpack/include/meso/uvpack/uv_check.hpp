@@ -18,6 +18,9 @@ struct UvCheckOptions {
   bool overlay = true;   // make the overlay image (size^2 RGBA floats)
   // Check MIP levels 0..mip_safe (-1: not checked); size must be a multiple of 2^mip_safe.
   int mip_safe = -1;
+  // The texture is sampled with repeat addressing (GL_REPEAT): padding and bilinear reads are
+  // also measured across its borders (find_uv_overlaps' wrap). Clamp-to-edge if false.
+  bool wrap = false;
 };
 
 // At MIP level `level`, `texels` level-k texels that a bilinear lookup inside chart `chart`
@@ -68,8 +71,9 @@ struct UvCheckReport {
 // texels hold their chart's values, every other texel those of its nearest touched texel
 // (dilation_sources, the bake's dilation, ties as it breaks them), level k+1 is the 2 x 2
 // mean of level k. A level-k texel holds chart c's values alone when all its 2^k x 2^k
-// level-0 texels do. A bilinear lookup at a point of chart c (clamp-to-edge) reads the
-// level-k texels within one (Chebyshev) of a level-k texel containing a texel c touches;
+// level-0 texels do. A bilinear lookup at a point of chart c reads the level-k texels
+// within one (Chebyshev; cut at the borders, or wrapped with options.wrap, while the
+// dilation stays in the plane as the bake's does) of a level-k texel containing a texel c touches;
 // each of them holding any other chart's value is a violation. A texel several charts touch
 // (reported as shared) counts as holding all of their values, whichever the bake writes, so
 // the verdict does not depend on the faces' order.

@@ -11,7 +11,7 @@
 namespace meso {
 
 struct ChartGap {
-  int chart_a = 0, chart_b = 0;  // chart_a < chart_b
+  int chart_a = 0, chart_b = 0;  // chart_a < chart_b; equal only across a border (wrap)
   double distance = 0;           // closest approach, texels at the checked size
 };
 
@@ -25,7 +25,10 @@ struct UvOverlapReport {
 };
 
 // `chart` gives each face's chart (uv_charts()); `size` the texture size in texels that the
-// padding is measured at.
-UvOverlapReport find_uv_overlaps(const Mesh& mesh, const std::vector<int>& chart, int size, double padding_texels);
+// padding is measured at. `wrap`: the texture is sampled with repeat addressing, so the
+// padding is also measured across its borders, against the charts moved by a whole texture
+// in u, v or both; there a chart that comes closer than the padding to itself (its two sides
+// meet across the border) is the pair (a, a). Overlaps stay those of the UVs as stored.
+UvOverlapReport find_uv_overlaps(const Mesh& mesh, const std::vector<int>& chart, int size, double padding_texels, bool wrap = false);
 
 }  // namespace meso
