@@ -160,11 +160,19 @@ TEST(Cli, UvpackMipSafeAndDensity) {
   test::TempDir dir;
   write_mesh(test::make_seamed_cube(), dir / "cube.obj");
   const std::string cube = (dir / "cube.obj").string();
-  const Result safe = run("uvpack pack " + cube + " -o " + (dir / "safe.obj").string() + " --size 256 --padding 2 --mip-safe 3 --json");
+  const Result safe = run("uvpack pack " + cube + " -o " + (dir / "safe.obj").string() + " --size 256 --padding 2 --mip-safe 3 --clamp --json");
   ASSERT_EQ(safe.code, 0) << safe.err;
   const auto report = nlohmann::json::parse(safe.out);
   EXPECT_EQ(report["mip_safe"], 3);
   EXPECT_EQ(report["check"]["mip_violations"], 0);
+  // For repeat addressing (the default) pack keeps only level 0 apart across the border, and
+  // says so; its report's check, measured with that addressing, counts the coarser levels'
+  // violations there.
+  const Result wrapped = run("uvpack pack " + cube + " -o " + (dir / "wrapped.obj").string() + " --size 256 --padding 2 --mip-safe 3 --json");
+  ASSERT_EQ(wrapped.code, 0) << wrapped.err;
+  EXPECT_NE(wrapped.err.find("only the level-0 padding is kept"), std::string::npos) << wrapped.err;
+  EXPECT_GT(nlohmann::json::parse(wrapped.out)["check"]["mip_violations"].get<int>(), 0);
+  EXPECT_EQ(run("uvpack check " + (dir / "wrapped.obj").string() + " --size 256 --padding 2 --mip-safe 0 --wrap --fail-on mip,padding").code, 0);
   EXPECT_GT(report["utilization"].get<double>(), 0.05);
   EXPECT_GT(report["texel_coverage"].get<double>(), report["utilization"].get<double>());
   const Result check = run("uvpack check " + (dir / "safe.obj").string() + " --size 256 --mip-safe 3 --fail-on mip,shared --report " +

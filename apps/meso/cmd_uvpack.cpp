@@ -278,6 +278,7 @@ void add_uvpack(CLI::App& app, Context& ctx) {
       verify.padding = o.padding;
       verify.overlay = false;
       verify.mip_safe = o.mip_safe;
+      verify.wrap = o.wrap;  // measured as the atlas will be sampled
       const UvCheckReport c = check_uv_mapping(mesh, verify);
       OutputSet outputs;
       write_mesh(mesh, outputs.add(pack_args->output));
