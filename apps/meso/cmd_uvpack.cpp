@@ -253,10 +253,6 @@ void add_uvpack(CLI::App& app, Context& ctx) {
       if (o.mip_safe >= 0 && o.size % (1 << o.mip_safe) != 0)
         throw UsageError("--mip-safe " + std::to_string(o.mip_safe) + " needs --size to be a multiple of " + std::to_string(1 << o.mip_safe));
       o.wrap = !pack_args->clamp;
-      if (o.mip_safe >= 0 && o.wrap)
-        warn(ctx.globals, "--mip-safe " + std::to_string(o.mip_safe) +
-                              " keeps MIP levels apart for clamp-to-edge sampling; across the atlas border (--wrap, the default) "
-                              "only the level-0 padding is kept: add --clamp if the atlas is sampled that way");
       if (2 * atlas_border_margin(o) >= o.size)
         throw UsageError("--padding " + std::to_string(o.padding) + " leaves no texel inside a " + std::to_string(o.size) + "-texel atlas");
       {

@@ -255,6 +255,12 @@ TEST(UvPack, MipSafePackingPassesTheMipCheck) {
     EXPECT_TRUE(cs.outside_faces.empty());
     EXPECT_TRUE(cs.mip_violations.empty()) << cs.mip_violations.size() << " violations, first at level " << cs.mip_violations.front().level;
     EXPECT_EQ(cs.mip_safe_levels, levels);
+    // Packed for repeat addressing (the default), it also passes the check that wraps around
+    // the border (the margin of 2^K texels keeps lookups from wrapping).
+    check.wrap = true;
+    const UvCheckReport cw = check_uv_mapping(safe, check);
+    EXPECT_TRUE(cw.padding_violations.empty());
+    EXPECT_TRUE(cw.mip_violations.empty()) << cw.mip_violations.size() << " violations across the border";
     if (levels >= 2) {
       EXPECT_FALSE(cp.mip_violations.empty()) << "padding 2 alone should mix charts by level " << levels;
     }

@@ -3,6 +3,8 @@
 // padding, four orientations, placement by bitmap search, largest chart first.
 #pragma once
 
+#include <algorithm>
+
 #include "meso/core/mesh.hpp"
 
 #include <cstddef>
@@ -22,7 +24,8 @@ struct UvPackOptions {
   int padding = 2;     // texels kept between charts (and to the atlas border: see wrap)
   // How the atlas will be sampled at its border. true (repeat, GL_REPEAT, glTF's default):
   // every chart keeps ceil(padding / 2) texels from the border, so that charts at opposite
-  // borders are at least `padding` apart across the wrap. false (clamp-to-edge): a lookup
+  // borders are at least `padding` apart across the wrap, and with mip_safe = K at least 2^K
+  // (atlas_border_margin). false (clamp-to-edge): a lookup
   // past the border reads the border texel itself, so charts may touch the border (xatlas
   // packs this way, whatever the sampler).
   bool wrap = true;
@@ -57,8 +60,8 @@ struct UvPackReport {
 // integer texel offsets. Guarantees,
 // at options.size, for the UVs as written (rounded to float): no texel is touched
 // (conservatively: the triangle meets its square) by two charts, and touched texels of different charts are at least `padding` texels apart
-// (Chebyshev, hence also Euclidean) and, with wrap, at least ceil(padding / 2) from the atlas
-// border (atlas_border_margin), so also `padding` apart across it. The
+// (Chebyshev, hence also Euclidean) and, with wrap, at least atlas_border_margin texels from
+// the atlas border, so also `padding` apart across it. The
 // scale is one at which the greedy placement succeeds, within the quality's tolerance of one at
 // which it fails (each packing's fill aims the next: 4-6 packings where bisection took 9), or a
 // larger one at which a variant succeeds (PackQuality). Charts with
@@ -68,7 +71,8 @@ struct UvPackReport {
 // chart reads (the 2 x 2 texels around the lookup, so the level-k texels within one of a
 // level-k texel the chart touches) holds another chart's values, for box-filtered levels
 // (level k+1 the mean of 2 x 2 texels of level k) of a map whose empty texels were dilated
-// from their nearest written texel (meso bake's dilation), with clamp-to-edge addressing.
+// from their nearest written texel (meso bake's dilation), with clamp-to-edge addressing, or
+// with repeat (wrap), where the border margin keeps every such lookup from wrapping around.
 // How: at level 0 touched texels of two charts are at least 3 apart (padding >= 2); at level
 // k >= 1 the level-k texels that two charts touch are at least m_k apart (Chebyshev, in level-k
 // texels), m_1 = 4, m_k = 5 beyond. Then every level-0 texel of a level-k texel that chart c
@@ -78,7 +82,16 @@ struct UvPackReport {
 // std::invalid_argument when the charts cannot fit even at the smallest scale tried.
 UvPackReport pack_uv_charts(Mesh& mesh, const UvPackOptions& options);
 
-// The texels every chart keeps free along each side of the atlas (UvPackOptions::wrap).
-inline int atlas_border_margin(const UvPackOptions& o) { return o.wrap ? (o.padding > 0 ? (o.padding + 1) / 2 : 0) : 0; }
+// The texels every chart keeps free along each side of the atlas (UvPackOptions::wrap): half
+// the padding, rounded up, so that charts at opposite sides keep the padding across the
+// border; with mip_safe = K at least 2^K, so that no bilinear lookup of levels 0..K wraps
+// around: the bake's dilation fills the texels along a side from the charts on that side, so
+// a lookup that wrapped would read another chart's values (then the guarantee above holds as
+// in the plane).
+inline int atlas_border_margin(const UvPackOptions& o) {
+  if (!o.wrap) return 0;
+  const int half = o.padding > 0 ? (o.padding + 1) / 2 : 0;
+  return o.mip_safe >= 0 ? std::max(half, 1 << o.mip_safe) : half;
+}
 
 }  // namespace meso
