@@ -378,6 +378,24 @@ TEST(Preview, MethodsNeedTheirStreams) {
   EXPECT_NO_THROW(check_cone_matches(mirror_cone, mirrored, "conservative", "cone.exr"));
   EXPECT_NO_THROW(check_pyramid_matches(mirror_pyramid, mirrored, "pyramid.exr"));
   EXPECT_NO_THROW(check_sdf_matches(mirror_sdf, mirrored, "sdf.exr"));
+  // A tiling map moved by one texel (the same values, so the same range): its pyramid and
+  // distance field are refused as well as its cone map (their footprint extremes differ),
+  // and the map's own streams pass.
+  Image tile(64, 64, 1), moved(64, 64, 1);
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 64; ++x) {
+      tile.at(x, y) = static_cast<float>(0.05 * std::sin(2 * kPi * texel_center_u(x, 64)));
+      moved.at(x, y) = static_cast<float>(0.05 * std::sin(2 * kPi * texel_center_u((x + 1) % 64, 64)));
+    }
+  const HeightField tile_field = make_height_field(tile, Border::wrap), moved_field = make_height_field(moved, Border::wrap);
+  const Image moved_pyramid = pyramid_image(moved_field), tile_pyramid = pyramid_image(tile_field);
+  const Image moved_sdf = distance_field_image(build_distance_field(moved_field, DistanceFieldOptions{}), moved_field);
+  const Image tile_sdf = distance_field_image(build_distance_field(tile_field, DistanceFieldOptions{}), tile_field);
+  EXPECT_THROW(check_cone_matches(build_cone_map(moved_field, ConeMapOptions{}), tile, "conservative", "cone.exr"), InputError);
+  EXPECT_THROW(check_pyramid_matches(moved_pyramid, tile, "pyramid.exr"), InputError);
+  EXPECT_THROW(check_sdf_matches(moved_sdf, tile, "sdf.exr"), InputError);
+  EXPECT_NO_THROW(check_pyramid_matches(tile_pyramid, tile, "pyramid.exr"));
+  EXPECT_NO_THROW(check_sdf_matches(tile_sdf, tile, "sdf.exr"));
   maps.cone = Image();
   EXPECT_THROW(render_headless(quad, maps, centre_uv_options("cone", 30.0f)), UsageError);
 }

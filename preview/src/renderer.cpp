@@ -78,32 +78,27 @@ void check_height_range(const Image& stream, const Image& displacement, const st
     throw InputError(name, "was made from another height map (its height range differs from displacement.exr's)");
 }
 
+std::string string_attribute(const Image& img, const char* key);
+
 // A stream made from another height map with the same range passes check_height_range: its
-// own heights must also be this map's, normalised with the stream's range. `holds(texel, x,
-// y, h)` says whether the stream's texel (x, y) of level 0 fits the displacement, whose
-// normalised heights h(x', y') it may read around (x, y), clamped to the map. The tolerance
-// covers what quantisation between the two files can change: --half heights (at most 2^-12
-// near 1) and streams made from bake's 8-bit displacement.png (1/510); a height map that
-// differs by more than 1/256 of the range at some texel is another map.
+// own heights must also be this map's. `holds(texel, x, y, h, footprint)` says whether the
+// stream's texel (x, y) of level 0 fits the displacement there: h its normalised height,
+// footprint the exact minimum and maximum of its filtered surface over the texel
+// (footprint_min_max, with the stream's meso:border), i.e. pyramid.exr's level 0 as this map
+// makes it. The tolerance covers what quantisation between the two files can change: --half
+// values (at most 2^-12 near 1) and streams made from bake's 8-bit displacement.png (1/510);
+// a map whose heights differ by more than 1/256 of the range at some texel is another map.
 constexpr float kStreamHeightTolerance = 1.0f / 256.0f;
 template <typename Holds>
-void check_stream_heights(const Image& stream, const Image& displacement, const std::string& name, const char* producer, Holds holds) {
-  const float bias = stream_number(stream, "height_bias", name, producer), scale = stream_number(stream, "height_scale", name, producer);
-  const int w = displacement.width, hgt = displacement.height;
-  std::vector<float> normalised(displacement.texel_count());
-  for (size_t i = 0; i < normalised.size(); ++i) {
-    const float d = displacement.pixels[i * static_cast<size_t>(displacement.channels)];
-    normalised[i] = scale > 0 ? std::clamp((d - bias) / scale, 0.0f, 1.0f) : 0.0f;
-  }
-  auto h = [&](int x, int y) {
-    return normalised[static_cast<size_t>(std::clamp(y, 0, hgt - 1)) * static_cast<size_t>(w) + static_cast<size_t>(std::clamp(x, 0, w - 1))];
-  };
-  const size_t channels = static_cast<size_t>(stream.channels);
-  for (int y = 0; y < hgt; ++y)
-    for (int x = 0; x < w; ++x)
-      if (!holds(&stream.pixels[(static_cast<size_t>(y) * static_cast<size_t>(w) + static_cast<size_t>(x)) * channels], x, y, h))
-        throw InputError(name, "the height at texel (" + std::to_string(x) + ", " + std::to_string(y) +
-                                   ") differs from displacement.exr's (made from another height map?)");
+void check_stream_heights(const Image& stream, const Image& displacement, const std::string& name, Holds holds) {
+  const Border border = string_attribute(stream, "border") == "wrap" ? Border::wrap : Border::clamp;
+  const HeightField field = make_height_field(displacement, border);
+  const Image footprint = footprint_min_max(field);
+  const size_t channels = static_cast<size_t>(stream.channels), w = static_cast<size_t>(displacement.width);
+  for (size_t i = 0; i < field.height.texel_count(); ++i)
+    if (!holds(&stream.pixels[i * channels], i % w, i / w, field.height.pixels[i], &footprint.pixels[2 * i]))
+      throw InputError(name, "the height at texel (" + std::to_string(i % w) + ", " + std::to_string(i / w) +
+                                 ") differs from displacement.exr's (made from another height map?)");
 }
 
 std::string string_attribute(const Image& img, const char* key) {
@@ -141,24 +136,19 @@ void check_sdf_matches(const Image& sdf, const Image& displacement, const std::s
   if (!(stream_number(sdf, "relief", name) > 0)) throw InputError(name, "its meso:relief is not a height range > 0");
   check_stream_values(sdf, name, "a distance field's values (distances >= 0)", [](const float* v) { return v[0] >= 0; });
   check_height_range(sdf, displacement, name, "meso streams sdf");
-  // Per column (x, y): voxels whose centre lies below the texel's own height are inside the
-  // solid (distance 0), since the texel's footprint maximum (the solid's top there) is at
-  // least that height; those above the maximum of the 3 x 3 texels around it (which bounds
-  // the filtered surface over the footprint, read as meso:border says) are outside, at least
-  // min(1/2 texel, their height above it) away, which is checked where that stays above
-  // half's smallest normal number (a --half file rounds distances down).
-  const int w = sdf.width, rows = displacement.height;
+  // Per column (x, y), with top the maximum of the filtered surface over the texel's
+  // footprint (the solid's top there): voxels whose centre lies below it are inside (0);
+  // those above are outside, at least min(1/2 texel, their height above it) away (other
+  // columns are half a texel away at least), which is checked where that stays above half's
+  // smallest normal number (a --half file rounds distances down).
+  const size_t w = static_cast<size_t>(sdf.width), rows = static_cast<size_t>(displacement.height);
   const float relief = stream_number(sdf, "relief", name);
-  const bool wrap = string_attribute(sdf, "border") == "wrap";
-  check_stream_heights(sdf, displacement, name, "meso streams sdf", [&](const float*, int x, int y, auto h) {
-    float top = 0.0f;
-    for (int dy = -1; dy <= 1; ++dy)
-      for (int dx = -1; dx <= 1; ++dx) top = std::max(top, wrap ? h((x + dx + w) % w, (y + dy + rows) % rows) : h(x + dx, y + dy));
+  check_stream_heights(sdf, displacement, name, [&](const float*, size_t x, size_t y, float, const float* footprint) {
+    const float top = footprint[1];
     for (int k = 0; k < depth; ++k) {
       const float z = (static_cast<float>(k) + 0.5f) / static_cast<float>(depth);
-      const float d = sdf.pixels[(static_cast<size_t>(k) * static_cast<size_t>(rows) + static_cast<size_t>(y)) * static_cast<size_t>(w) +
-                                 static_cast<size_t>(x)];
-      if (z < h(x, y) - kStreamHeightTolerance && d != 0.0f) return false;
+      const float d = sdf.pixels[(static_cast<size_t>(k) * rows + y) * w + x];
+      if (z < top - kStreamHeightTolerance && d != 0.0f) return false;
       const float away = std::min(0.5f / static_cast<float>(w), (z - top - kStreamHeightTolerance) * relief);
       if (away > 6.2e-5f && !(d > 0.0f)) return false;
     }
@@ -182,9 +172,10 @@ void check_cone_matches(const Image& cone, const Image& displacement, const std:
   check_stream_values(cone, name, "a cone map's values (height in [0, 1], ratio in [0, meso:ratio_cap], apex >= height)",
                       [cap](const float* v) { return v[0] >= 0 && v[0] <= 1 && v[1] >= 0 && v[1] <= cap && v[2] >= v[0]; });
   check_height_range(cone, displacement, name, producer);
-  // R is the texel's normalised height (the surface the cone methods trace).
-  check_stream_heights(cone, displacement, name, producer,
-                       [](const float* v, int x, int y, auto h) { return std::abs(v[0] - h(x, y)) <= kStreamHeightTolerance; });
+  // R is the texel's normalised height (the surface the cone methods trace), B its footprint's maximum.
+  check_stream_heights(cone, displacement, name, [](const float* v, size_t, size_t, float h, const float* footprint) {
+    return std::abs(v[0] - h) <= kStreamHeightTolerance && std::abs(v[2] - footprint[1]) <= kStreamHeightTolerance;
+  });
 }
 
 void check_pyramid_matches(const Image& pyramid, const Image& displacement, const std::string& name) {
@@ -194,9 +185,9 @@ void check_pyramid_matches(const Image& pyramid, const Image& displacement, cons
   check_stream_values(pyramid, name, "a min-max pyramid's values (0 <= min <= max <= 1)",
                       [](const float* v) { return v[0] >= 0 && v[0] <= v[1] && v[1] <= 1; });
   check_height_range(pyramid, displacement, name, "meso streams pyramid");
-  // Level 0 holds the extremes over each texel's footprint, which contains its centre.
-  check_stream_heights(pyramid, displacement, name, "meso streams pyramid", [](const float* v, int x, int y, auto h) {
-    return v[0] <= h(x, y) + kStreamHeightTolerance && v[1] >= h(x, y) - kStreamHeightTolerance;
+  // Level 0 holds the extremes over each texel's footprint.
+  check_stream_heights(pyramid, displacement, name, [](const float* v, size_t, size_t, float, const float* footprint) {
+    return std::abs(v[0] - footprint[0]) <= kStreamHeightTolerance && std::abs(v[1] - footprint[1]) <= kStreamHeightTolerance;
   });
 }
 
