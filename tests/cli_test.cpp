@@ -174,6 +174,12 @@ TEST(Cli, UvpackMipSafeAndDensity) {
   EXPECT_EQ(wrapped_report["border_margin"], 8);
   EXPECT_EQ(wrapped_report["check"]["mip_violations"], 0);
   EXPECT_EQ(run("uvpack check " + (dir / "wrapped.obj").string() + " --size 256 --padding 2 --mip-safe 3 --wrap --fail-on mip,padding").code, 0);
+  // Where that margin leaves no room, the error names --mip-safe, not the padding.
+  const Result no_room = run("uvpack pack " + cube + " -o " + (dir / "x.obj").string() + " --size 16 --padding 2 --mip-safe 3");
+  EXPECT_EQ(no_room.code, 2);
+  EXPECT_NE(no_room.err.find("--mip-safe 3 (8 texels from each side under --wrap; --clamp keeps none) leaves no texel inside a 16-texel atlas"),
+            std::string::npos)
+      << no_room.err;
   EXPECT_GT(report["utilization"].get<double>(), 0.05);
   EXPECT_GT(report["texel_coverage"].get<double>(), report["utilization"].get<double>());
   const Result check = run("uvpack check " + (dir / "safe.obj").string() + " --size 256 --mip-safe 3 --fail-on mip,shared --report " +

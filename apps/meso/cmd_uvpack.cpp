@@ -253,8 +253,14 @@ void add_uvpack(CLI::App& app, Context& ctx) {
       if (o.mip_safe >= 0 && o.size % (1 << o.mip_safe) != 0)
         throw UsageError("--mip-safe " + std::to_string(o.mip_safe) + " needs --size to be a multiple of " + std::to_string(1 << o.mip_safe));
       o.wrap = !pack_args->clamp;
-      if (2 * atlas_border_margin(o) >= o.size)
-        throw UsageError("--padding " + std::to_string(o.padding) + " leaves no texel inside a " + std::to_string(o.size) + "-texel atlas");
+      if (2 * atlas_border_margin(o) >= o.size) {
+        // The margin is half the padding, or 2^K texels for --mip-safe K: name the one that set it.
+        const std::string by = o.mip_safe >= 0 && (1 << o.mip_safe) > (o.padding + 1) / 2
+                                   ? "--mip-safe " + std::to_string(o.mip_safe) + " (" + std::to_string(1 << o.mip_safe) +
+                                         " texels from each side under --wrap; --clamp keeps none)"
+                                   : "--padding " + std::to_string(o.padding);
+        throw UsageError(by + " leaves no texel inside a " + std::to_string(o.size) + "-texel atlas");
+      }
       {
         const std::vector<double> areas = chart_uv_areas(mesh);
         if (!(std::accumulate(areas.begin(), areas.end(), 0.0) > 0))

@@ -26,9 +26,11 @@ struct UvOverlapReport {
 
 // `chart` gives each face's chart (uv_charts()); `size` the texture size in texels that the
 // padding is measured at. `wrap`: the texture is sampled with repeat addressing, so the
-// padding is also measured across its borders, against the charts moved by a whole texture
-// in u, v or both; there a chart that comes closer than the padding to itself (its two sides
-// meet across the border) is the pair (a, a). Overlaps stay those of the UVs as stored.
+// padding is also measured across its borders, against the charts moved by one texture in
+// u, v or both (so for UVs within one texture of [0, 1]: faces farther out are reported as
+// outside by uv_check, not measured); there a chart that comes closer than the padding to
+// itself (its two sides meet across the border) is the pair (a, a). Overlaps stay those of
+// the UVs as stored.
 UvOverlapReport find_uv_overlaps(const Mesh& mesh, const std::vector<int>& chart, int size, double padding_texels, bool wrap = false);
 
 }  // namespace meso
