@@ -116,7 +116,8 @@ UvOverlapReport find_uv_overlaps(const Mesh& mesh, const std::vector<int>& chart
     const auto& ta = tri[static_cast<size_t>(fa)];
     std::array<Point, 3> tb = tri[static_cast<size_t>(fb)];
     if (across)
-      for (Point& p : tb) p = Point(p.x() + (sb % 3 - 1), p.y() + (sb / 3 - 1));  // exact: UVs are floats, shifts small integers
+      // In double: exact for a float UV unless it is below 2^-29 in magnitude (then within 2^-53).
+      for (Point& p : tb) p = Point(p.x() + (sb % 3 - 1), p.y() + (sb / 3 - 1));
     const bool overlap = interiors_overlap(ta, tb);
     if (overlap && !across) r.overlap_pairs.emplace_back(fa, fb);
     int ca = chart[static_cast<size_t>(fa)], cb = chart[static_cast<size_t>(fb)];
