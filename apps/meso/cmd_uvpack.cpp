@@ -254,8 +254,10 @@ void add_uvpack(CLI::App& app, Context& ctx) {
         throw UsageError("--mip-safe " + std::to_string(o.mip_safe) + " needs --size to be a multiple of " + std::to_string(1 << o.mip_safe));
       o.wrap = !pack_args->clamp;
       if (2 * atlas_border_margin(o) >= o.size) {
-        // The margin is half the padding, or 2^K texels for --mip-safe K: name the one that set it.
-        const std::string by = o.mip_safe >= 0 && (1 << o.mip_safe) > (o.padding + 1) / 2
+        // Name what set the margin: the padding, or --mip-safe's wider one.
+        UvPackOptions padding_only = o;
+        padding_only.mip_safe = -1;
+        const std::string by = atlas_border_margin(o) > atlas_border_margin(padding_only)
                                    ? "--mip-safe " + std::to_string(o.mip_safe) + " (" + std::to_string(1 << o.mip_safe) +
                                          " texels from each side under --wrap; --clamp keeps none)"
                                    : "--padding " + std::to_string(o.padding);

@@ -557,11 +557,10 @@ void check_gltf(const std::string& text, const std::string& name) {
     if (version != 2) throw InputError(name, "is binary glTF version " + std::to_string(version) + ", which meso cannot read (2 or 1)");
     if (u32(8) > text.size())
       throw InputError(name, "is cut short: its binary glTF header announces " + std::to_string(u32(8)) + " bytes, the file holds " + held);
-    if (text.size() < 20) throw InputError(name, "is cut short: " + held + ", no room for its JSON chunk");
-    if (text.compare(16, 4, "JSON") != 0) throw InputError(name, "its first binary glTF chunk is not JSON");
     // The chunks within the announced length (bytes past it are not the glTF's).
     const size_t end = u32(8);
     if (end < 20) throw InputError(name, "its binary glTF header announces " + std::to_string(end) + " bytes, less than a header and a chunk");
+    if (text.compare(16, 4, "JSON") != 0) throw InputError(name, "its first binary glTF chunk is not JSON");
     for (size_t at = 12; at < end;) {
       if (end - at < 8) throw InputError(name, "its binary glTF chunks end inside a chunk header (at byte " + std::to_string(at) + ")");
       const uint32_t length = u32(at);
