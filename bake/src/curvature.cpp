@@ -3,6 +3,9 @@
 #include "meso/core/mesh_arrays.hpp"
 
 #include <Eigen/Dense>
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
@@ -21,8 +24,9 @@ struct FitTerms {
 
 // The least-squares fit of h = a' u'^2 + b' u' v' + c' v'^2 + d' u' + e' v' (+ the `terms`)
 // in whitened coordinates (u', v') = W (u, v), v' along the long axis. `height_scale`
-// (object units, > 0) scales the h^2 column to the size of the others; scaling a column
-// changes the conditioning test, not the fit. Returns the graph's second-order Taylor
+// (object units, > 0) divides h in the h^2 column: the root of the mean h^4 puts that column
+// on the scale of the whitened ones, so that the conditioning test asks whether the points
+// determine its coefficient, not how small it is (scaling a column does not change the fit). Returns the graph's second-order Taylor
 // coefficients at the vertex, a..e back in (u, v), and the norm of the fit's residual;
 // false when the points do not determine the fit.
 bool solve_whitened(const std::vector<Eigen::Vector3d>& uvh, const Eigen::Matrix2d& W, FitTerms terms, double height_scale,
@@ -54,10 +58,7 @@ bool solve_whitened(const std::vector<Eigen::Vector3d>& uvh, const Eigen::Matrix
   // Ill-conditioned (the neighbours in two rows through the vertex, say): the coefficients
   // would follow rounding rather than the surface. Measured before whitening: a condition
   // number near 1e3 let -O1 and -O2 builds differ by 8% in curvature.
-  // Over a ring a few degrees wide the h^2 column is close to a combination of the quadratic
-  // ones, so it gets a limit of its own: fit_quadric keeps it only where it explains the
-  // heights ten times better than the quadric alone, so that the data, not rounding, set it.
-  if (!(sv[cols - 1] > (terms.sphere ? 1e-4 : 1e-2) * sv[0])) return false;
+  if (!(sv[cols - 1] > 1e-2 * sv[0])) return false;
   const Eigen::VectorXd c = svd.solve(h);
   residual = (A * c - h).norm();
   // Back to (u, v): h = x'^T P x' + g^T x' + ... with x' = W x, so P_uv = W^T P W and
@@ -150,7 +151,10 @@ Fit fit_quadric(const std::vector<Eigen::Vector3d>& uvh, Eigen::Matrix<double, 5
   if (!misfit && !(height > 1e-2 * size)) return Fit::kQuadric;
   Eigen::Matrix<double, 5, 1> sphere_coef;
   double sphere_residual = 0;
-  const bool sphere_fits = solve_whitened(uvh, W, {false, true}, size, sphere_coef, sphere_residual);
+  double h4 = 0;
+  for (const auto& p : uvh) h4 += p.z() * p.z() * p.z() * p.z();
+  const double scale = std::sqrt(std::sqrt(h4 / static_cast<double>(uvh.size())));
+  const bool sphere_fits = solve_whitened(uvh, W, {false, true}, scale, sphere_coef, sphere_residual);
   if (misfit) {
     if (!sphere_fits || !(sphere_residual <= 0.1 * residual)) return Fit::kQuadric;
     coef = sphere_coef;
@@ -162,99 +166,116 @@ Fit fit_quadric(const std::vector<Eigen::Vector3d>& uvh, Eigen::Matrix<double, 5
   return sphere_fits ? Fit::kQuadric : Fit::kUndecided;
 }
 
+// A thread's working memory for fit_vertex: `mark` holds, per vertex, the last vertex whose
+// neighbourhood took it in (vertices are fitted once each, so a stale mark never matches).
+struct FitScratch {
+  std::vector<int> mark;
+  std::vector<VertexHandle> ring;
+  std::vector<Eigen::Vector3d> uvh;
+};
+
+// fit_curvature's work for vertex v, which depends on v's rings only (so the result does not
+// depend on the threads).
+VertexCurvature fit_vertex(const Mesh& mesh, VertexHandle v, FitScratch& scratch) {
+  std::vector<int>& mark = scratch.mark;
+  std::vector<VertexHandle>& ring = scratch.ring;
+  std::vector<Eigen::Vector3d>& uvh = scratch.uvh;
+  VertexCurvature out;
+  Vec3d n = OpenMesh::vector_cast<Vec3d>(mesh.normal(v));
+  if (!(n.norm() > 0)) return out;
+  n.normalize();
+  const Vec3d t = any_perpendicular(n), b = OpenMesh::cross(n, t);
+  const Vec3d p = OpenMesh::vector_cast<Vec3d>(mesh.point(v));
+  // Without a fit the directions are still a frame of the tangent plane (k1 = k2 = 0 leaves
+  // them arbitrary, but a consumer that builds a frame from d1 gets a valid one).
+  out.d1 = OpenMesh::vector_cast<Vec3f>(t);
+  out.d2 = OpenMesh::vector_cast<Vec3f>(b);
+  // Gather the 1-ring, then grow ring by ring (2, then 3) while the neighbourhood does not
+  // determine the fit, or cannot tell whether it needs the sphere term.
+  ring.clear();
+  mark[static_cast<size_t>(v.idx())] = v.idx();
+  for (auto w : mesh.vv_range(v)) {
+    if (mark[static_cast<size_t>(w.idx())] == v.idx()) continue;
+    mark[static_cast<size_t>(w.idx())] = v.idx();
+    ring.push_back(w);
+  }
+  Eigen::Matrix<double, 5, 1> coef, wider;
+  int rings = 0;
+  bool undecided = false;  // the fit's ring cannot tell a sphere from its quadric
+  size_t frontier = 0;     // the vertices the last ring added start here
+  for (int r = 1; r <= 3 && (rings == 0 || undecided); ++r) {
+    if (r >= 2) {
+      const size_t end = ring.size();
+      for (size_t i = frontier; i < end; ++i)
+        for (auto w : mesh.vv_range(ring[i])) {
+          if (mark[static_cast<size_t>(w.idx())] == v.idx()) continue;
+          mark[static_cast<size_t>(w.idx())] = v.idx();
+          ring.push_back(w);
+        }
+      frontier = end;
+    }
+    if (r == 1 && ring.size() < 8) continue;  // 5 unknowns: want real redundancy
+    uvh.clear();
+    for (auto w : ring) {
+      const Vec3d d = OpenMesh::vector_cast<Vec3d>(mesh.point(w)) - p;
+      uvh.emplace_back(OpenMesh::dot(d, t), OpenMesh::dot(d, b), OpenMesh::dot(d, n));
+    }
+    if (rings == 0) {
+      const Fit fit = fit_quadric(uvh, coef);
+      rings = fit == Fit::kNone ? 0 : r;
+      undecided = fit == Fit::kUndecided;
+    } else {
+      // The next ring decides an undecided fit, and replaces it only with a sphere's: the
+      // poles of a coarse UV sphere (16 x 8: the paraboloid through the pole's ring gave
+      // 1.04 / r) get the sphere, the apex of a paraboloid keeps its 1-ring.
+      if (fit_quadric(uvh, wider) == Fit::kSphere) {
+        coef = wider;
+        rings = r;
+      }
+      undecided = false;
+    }
+  }
+  if (rings == 0) return out;
+  // The fitted graph x(u, v) = p + u t + v b + h(u, v) n at the origin: tangents
+  // x_u = t + d n, x_v = b + e n; first fundamental form I = [[1+d^2, de], [de, 1+e^2]];
+  // second, with the unit normal N = (n - d t - e b) / sqrt(1 + d^2 + e^2):
+  // II = [[2a, b], [b, 2c]] / sqrt(1 + d^2 + e^2). The shape operator is I^-1 II; the
+  // curvature is its negative (convex positive: the surface bends away from N).
+  const double a = coef[0], bb = coef[1], cc = coef[2], du = coef[3], dv = coef[4];
+  const double g = std::sqrt(1 + du * du + dv * dv);
+  Eigen::Matrix2d I, II;
+  I << 1 + du * du, du * dv, du * dv, 1 + dv * dv;
+  II << -2 * a / g, -bb / g, -bb / g, -2 * cc / g;
+  // Symmetrise with the Cholesky factor I = L L^T: L^-1 II L^-T has the same eigenvalues,
+  // and eigenvectors y map back to (u, v) directions as L^-T y.
+  const Eigen::Matrix2d L = I.llt().matrixL();
+  const Eigen::Matrix2d Li = L.inverse();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(Li * II * Li.transpose());  // ascending
+  // Beyond float (features ~1e-39 across on a mesh of ordinary size): no fit, as where the
+  // rings cannot determine one, rather than Inf in the mesh's _CURVATURE.
+  if (!std::isfinite(static_cast<float>(eig.eigenvalues()[0])) || !std::isfinite(static_cast<float>(eig.eigenvalues()[1]))) return out;
+  // + 0: a flat neighbourhood's -0 (a plane's fit gives either sign) is written as 0.
+  out.k1 = static_cast<float>(eig.eigenvalues()[1]) + 0.0f;
+  out.k2 = static_cast<float>(eig.eigenvalues()[0]) + 0.0f;
+  const Eigen::Vector2d e1 = Li.transpose() * eig.eigenvectors().col(1);
+  // The direction in the vertex normal's tangent plane (what the exported NORMAL and
+  // TANGENT span): the in-plane part of the fitted surface's direction.
+  const Vec3d d1 = (t * e1[0] + b * e1[1]).normalize();
+  out.d1 = OpenMesh::vector_cast<Vec3f>(d1);
+  out.d2 = OpenMesh::vector_cast<Vec3f>(OpenMesh::cross(n, d1));
+  out.rings = rings;
+  return out;
+}
+
 }  // namespace
 
 std::vector<VertexCurvature> fit_curvature(const Mesh& mesh) {
   std::vector<VertexCurvature> out(mesh.n_vertices());
-  std::vector<int> mark(mesh.n_vertices(), -1);
-  std::vector<VertexHandle> ring;
-  std::vector<Eigen::Vector3d> uvh;
-  for (auto v : mesh.vertices()) {
-    Vec3d n = OpenMesh::vector_cast<Vec3d>(mesh.normal(v));
-    if (!(n.norm() > 0)) continue;
-    n.normalize();
-    const Vec3d t = any_perpendicular(n), b = OpenMesh::cross(n, t);
-    const Vec3d p = OpenMesh::vector_cast<Vec3d>(mesh.point(v));
-    // Without a fit the directions are still a frame of the tangent plane (k1 = k2 = 0 leaves
-    // them arbitrary, but a consumer that builds a frame from d1 gets a valid one).
-    out[static_cast<size_t>(v.idx())].d1 = OpenMesh::vector_cast<Vec3f>(t);
-    out[static_cast<size_t>(v.idx())].d2 = OpenMesh::vector_cast<Vec3f>(b);
-    // Gather the 1-ring, then grow ring by ring (2, then 3) while the neighbourhood does not
-    // determine the fit, or cannot tell whether it needs the sphere term.
-    ring.clear();
-    mark[static_cast<size_t>(v.idx())] = v.idx();
-    for (auto w : mesh.vv_range(v)) {
-      if (mark[static_cast<size_t>(w.idx())] == v.idx()) continue;
-      mark[static_cast<size_t>(w.idx())] = v.idx();
-      ring.push_back(w);
-    }
-    Eigen::Matrix<double, 5, 1> coef, wider;
-    int rings = 0;
-    bool undecided = false;  // the fit's ring cannot tell a sphere from its quadric
-    size_t frontier = 0;     // the vertices the last ring added start here
-    for (int r = 1; r <= 3 && (rings == 0 || undecided); ++r) {
-      if (r >= 2) {
-        const size_t end = ring.size();
-        for (size_t i = frontier; i < end; ++i)
-          for (auto w : mesh.vv_range(ring[i])) {
-            if (mark[static_cast<size_t>(w.idx())] == v.idx()) continue;
-            mark[static_cast<size_t>(w.idx())] = v.idx();
-            ring.push_back(w);
-          }
-        frontier = end;
-      }
-      if (r == 1 && ring.size() < 8) continue;  // 5 unknowns: want real redundancy
-      uvh.clear();
-      for (auto w : ring) {
-        const Vec3d d = OpenMesh::vector_cast<Vec3d>(mesh.point(w)) - p;
-        uvh.emplace_back(OpenMesh::dot(d, t), OpenMesh::dot(d, b), OpenMesh::dot(d, n));
-      }
-      if (rings == 0) {
-        const Fit fit = fit_quadric(uvh, coef);
-        rings = fit == Fit::kNone ? 0 : r;
-        undecided = fit == Fit::kUndecided;
-      } else {
-        // The next ring decides an undecided fit, and replaces it only with a sphere's: the
-        // poles of a coarse UV sphere (16 x 8: the paraboloid through the pole's ring gave
-        // 1.04 / r) get the sphere, the apex of a paraboloid keeps its 1-ring.
-        if (fit_quadric(uvh, wider) == Fit::kSphere) {
-          coef = wider;
-          rings = r;
-        }
-        undecided = false;
-      }
-    }
-    if (rings == 0) continue;
-    // The fitted graph x(u, v) = p + u t + v b + h(u, v) n at the origin: tangents
-    // x_u = t + d n, x_v = b + e n; first fundamental form I = [[1+d^2, de], [de, 1+e^2]];
-    // second, with the unit normal N = (n - d t - e b) / sqrt(1 + d^2 + e^2):
-    // II = [[2a, b], [b, 2c]] / sqrt(1 + d^2 + e^2). The shape operator is I^-1 II; the
-    // curvature is its negative (convex positive: the surface bends away from N).
-    const double a = coef[0], bb = coef[1], cc = coef[2], du = coef[3], dv = coef[4];
-    const double g = std::sqrt(1 + du * du + dv * dv);
-    Eigen::Matrix2d I, II;
-    I << 1 + du * du, du * dv, du * dv, 1 + dv * dv;
-    II << -2 * a / g, -bb / g, -bb / g, -2 * cc / g;
-    // Symmetrise with the Cholesky factor I = L L^T: L^-1 II L^-T has the same eigenvalues,
-    // and eigenvectors y map back to (u, v) directions as L^-T y.
-    const Eigen::Matrix2d L = I.llt().matrixL();
-    const Eigen::Matrix2d Li = L.inverse();
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(Li * II * Li.transpose());  // ascending
-    // Beyond float (features ~1e-39 across on a mesh of ordinary size): no fit, as where the
-    // rings cannot determine one, rather than Inf in the mesh's _CURVATURE.
-    if (!std::isfinite(static_cast<float>(eig.eigenvalues()[0])) || !std::isfinite(static_cast<float>(eig.eigenvalues()[1]))) continue;
-    VertexCurvature& c = out[static_cast<size_t>(v.idx())];
-    // + 0: a flat neighbourhood's -0 (a plane's fit gives either sign) is written as 0.
-    c.k1 = static_cast<float>(eig.eigenvalues()[1]) + 0.0f;
-    c.k2 = static_cast<float>(eig.eigenvalues()[0]) + 0.0f;
-    const Eigen::Vector2d e1 = Li.transpose() * eig.eigenvectors().col(1);
-    // The direction in the vertex normal's tangent plane (what the exported NORMAL and
-    // TANGENT span): the in-plane part of the fitted surface's direction.
-    const Vec3d d1 = (t * e1[0] + b * e1[1]).normalize();
-    c.d1 = OpenMesh::vector_cast<Vec3f>(d1);
-    c.d2 = OpenMesh::vector_cast<Vec3f>(OpenMesh::cross(n, d1));
-    c.rings = rings;
-  }
+  tbb::enumerable_thread_specific<FitScratch> scratch([&] { return FitScratch{std::vector<int>(mesh.n_vertices(), -1), {}, {}}; });
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, mesh.n_vertices(), 1024), [&](const tbb::blocked_range<size_t>& range) {
+    FitScratch& local = scratch.local();
+    for (size_t i = range.begin(); i != range.end(); ++i) out[i] = fit_vertex(mesh, VertexHandle(static_cast<int>(i)), local);
+  });
   return out;
 }
 

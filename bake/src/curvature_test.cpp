@@ -3,10 +3,12 @@
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <functional>
 #include <vector>
 
@@ -363,6 +365,24 @@ TEST(Curvature, CoarseTorusKeepsTheQuadricsFit) {
     EXPECT_NEAR(std::abs(k.k1), 1.11 / r, 0.01 / r) << "vertex " << vh.idx();
   }
   EXPECT_EQ(tops, 48u);
+}
+
+// Vertices are fitted in parallel, each from its own rings.
+TEST(Curvature, IndependentOfThreadCount) {
+  const Mesh m = test::make_parametric(160, 64, [&](double s, double t) {
+    const double u = 2 * kPi * s, v = 2 * kPi * t, w = 3 + std::cos(v) + 0.1 * std::sin(7 * u);
+    return Vec3f(float(w * std::cos(u)), float(w * std::sin(u)), float(std::sin(v)));
+  }, true, true);
+  const auto all = fit_curvature(m);
+  std::vector<VertexCurvature> one;
+  {
+    tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
+    one = fit_curvature(m);
+  }
+  ASSERT_EQ(all.size(), one.size());
+  for (size_t i = 0; i < all.size(); ++i) {
+    ASSERT_EQ(std::memcmp(&all[i], &one[i], sizeof(VertexCurvature)), 0) << "vertex " << i;
+  }
 }
 
 TEST(Curvature, TooFewNeighboursGiveNoFit) {

@@ -23,7 +23,8 @@ struct VertexCurvature {
   int rings = 0;                   // 1, 2 or 3: the neighbourhood that determined the fit; 0 = none
 };
 
-// One per vertex. Uses the 1-ring when it has at least 8 neighbours and determines the fit
+// One per vertex, fitted in parallel (each from its own rings: the same whatever the threads).
+// Uses the 1-ring when it has at least 8 neighbours and determines the fit
 // well (singular values within a factor 100 in coordinates whitened to the neighbourhood's
 // second moments, so long thin cells are no obstacle up to an aspect of 1000; a neighbourhood
 // more than twice as long as wide also fits cubic and quartic terms along its long axis,
