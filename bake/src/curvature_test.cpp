@@ -1,5 +1,6 @@
 #include "meso/bake/curvature.hpp"
 
+#include "meso/examples/parametric.hpp"
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -131,33 +132,9 @@ TEST(Curvature, SaddleHasOppositeCurvatures) {
   EXPECT_NEAR(std::abs(k.d1[1]), 1.0, 1e-3) << "bending away from +z along y";
 }
 
-// A closed surface of revolution about z on a UV grid with its poles: point(theta, phi) at
-// polar angle theta (0: the south pole, pi: the north one) and azimuth phi. The poles are one
-// vertex each, joined to every vertex of the first ring of latitude (`columns` neighbours),
-// the other vertices on a triangulated grid (valence 6).
-Mesh with_poles(int columns, int rows, const std::function<Vec3f(double, double)>& point) {
-  Mesh m;
-  std::vector<VertexHandle> ring;
-  const VertexHandle south = m.add_vertex(point(0, 0));
-  for (int j = 1; j < rows; ++j)
-    for (int i = 0; i < columns; ++i) ring.push_back(m.add_vertex(point(kPi * j / rows, 2 * kPi * i / columns)));
-  const VertexHandle north = m.add_vertex(point(kPi, 0));
-  auto at = [&](int j, int i) { return ring[static_cast<size_t>((j - 1) * columns + (i % columns))]; };
-  for (int i = 0; i < columns; ++i) {
-    m.add_face(south, at(1, i + 1), at(1, i));
-    m.add_face(north, at(rows - 1, i), at(rows - 1, i + 1));
-    for (int j = 1; j + 1 < rows; ++j) {
-      m.add_face(at(j, i), at(j, i + 1), at(j + 1, i + 1));
-      m.add_face(at(j, i), at(j + 1, i + 1), at(j + 1, i));
-    }
-  }
-  compute_angle_weighted_normals(m);
-  return m;
-}
-
 // A spheroid with radius a around z and c along it (c = a: a UV sphere).
 Mesh spheroid_with_poles(double a, double c, int columns, int rows) {
-  return with_poles(columns, rows, [&](double th, double ph) {
+  return make_surface_with_poles(columns, rows, [&](double th, double ph) {
     return Vec3f(float(a * std::sin(th) * std::cos(ph)), float(a * std::sin(th) * std::sin(ph)), float(-c * std::cos(th)));
   });
 }
@@ -204,7 +181,7 @@ TEST(Curvature, APolesRingThatCannotTellASphereLetsTheNextRingDecide) {
 
   // A lens of two paraboloids z = +-(1 - rho^2) / 2 meeting at rho = 1: at each apex the
   // curvature is 1 both ways, and the 1-ring's paraboloid is exactly the surface.
-  const Mesh lens = with_poles(32, 16, [](double th, double ph) {
+  const Mesh lens = make_surface_with_poles(32, 16, [](double th, double ph) {
     const double rho = std::sin(th), z = 0.5 * (1 - rho * rho);
     return Vec3f(float(rho * std::cos(ph)), float(rho * std::sin(ph)), float(th < kPi / 2 ? -z : z));
   });

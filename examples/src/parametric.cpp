@@ -2,6 +2,7 @@
 
 #include <array>
 #include <cmath>
+#include <vector>
 
 namespace meso {
 
@@ -25,6 +26,26 @@ Mesh make_parametric_surface(int columns, int rows, const std::function<Vec3f(do
       }
     }
   set_face_groups(m, {name}, {});
+  compute_angle_weighted_normals(m);
+  return m;
+}
+
+Mesh make_surface_with_poles(int columns, int rows, const std::function<Vec3f(double, double)>& point) {
+  Mesh m;
+  std::vector<VertexHandle> ring;
+  const VertexHandle south = m.add_vertex(point(0, 0));
+  for (int j = 1; j < rows; ++j)
+    for (int i = 0; i < columns; ++i) ring.push_back(m.add_vertex(point(M_PI * j / rows, 2 * M_PI * i / columns)));
+  const VertexHandle north = m.add_vertex(point(M_PI, 0));
+  auto at = [&](int j, int i) { return ring[static_cast<size_t>((j - 1) * columns + (i % columns))]; };
+  for (int i = 0; i < columns; ++i) {
+    m.add_face(south, at(1, i + 1), at(1, i));
+    m.add_face(north, at(rows - 1, i), at(rows - 1, i + 1));
+    for (int j = 1; j + 1 < rows; ++j) {
+      m.add_face(at(j, i), at(j, i + 1), at(j + 1, i + 1));
+      m.add_face(at(j, i), at(j + 1, i + 1), at(j + 1, i));
+    }
+  }
   compute_angle_weighted_normals(m);
   return m;
 }
