@@ -12,8 +12,8 @@
 //
 // Conventions: curvatures in 1/object units, k1 >= k2, positive where the surface bends
 // away from the vertex normal (meso's; a sphere with outward normals has +1/r). The truth is
-// signed by each vertex's own normal against the surface's outward direction, since
-// make_parametric_surface's winding faces some surfaces inward (the tori).
+// signed by each vertex's own normal against the surface's outward direction, whichever way
+// make_parametric_surface's winding faces a surface.
 //
 // The peer, per vertex: the vertex itself first (CGAL computes the Monge form at the fitted
 // surface's point over the first input point) and its k-ring, fitted by a jet of degree
@@ -113,7 +113,7 @@ Surface uv_sphere(int columns, int rows, bool moved) {
 
 // A torus about z, tube radius r around a circle of radius R, wrapped both ways. Across the
 // tube k = 1/r, along the ring cos(v) / (R + r cos v), v the tube angle (0 on the outer
-// equator). make_parametric_surface's winding faces this one inward.
+// equator).
 Surface torus(int columns, int rows) {
   const double R = 3.0, r = 1.0;
   Surface s;

@@ -4,11 +4,11 @@
 
 #include <Eigen/Dense>
 #include <tbb/blocked_range.h>
-#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace meso {
 
@@ -19,20 +19,24 @@ using Vec3d = OpenMesh::Vec3d;
 // Which terms a fit takes beyond h = a u^2 + b u v + c v^2 + d u + e v.
 struct FitTerms {
   bool long_axis = false;  // f v'^3 + g v'^4 along the neighbourhood's long axis v'
-  bool sphere = false;     // k h^2 (see fit_quadric)
+  // The implicit terms (see fit_quadric): kNone; kSphere, k h^2; kSurface, k h^2 + (m u' + n v') h.
+  enum Implicit { kNone, kSphere, kSurface } implicit = kNone;
 };
 
 // The least-squares fit of h = a' u'^2 + b' u' v' + c' v'^2 + d' u' + e' v' (+ the `terms`)
 // in whitened coordinates (u', v') = W (u, v), v' along the long axis. `height_scale`
-// (object units, > 0) divides h in the h^2 column: the root of the mean h^4 puts that column
-// on the scale of the whitened ones, so that the conditioning test asks whether the points
-// determine its coefficient, not how small it is (scaling a column does not change the fit). Returns the graph's second-order Taylor
-// coefficients at the vertex, a..e back in (u, v), and the norm of the fit's residual;
-// false when the points do not determine the fit.
+// (object units, > 0) divides h in the implicit terms' columns: the root of the mean h^4
+// puts them on the scale of the whitened ones, so that the conditioning test asks whether
+// the points determine their coefficients, not how small they are (scaling a column does
+// not change the fit). Returns the graph's second-order Taylor coefficients at the vertex,
+// a..e back in (u, v), and the norm of the fit's residual (infinite where implicit terms fit
+// the points on another sheet than the vertex's); false when the points do not determine
+// the fit.
 bool solve_whitened(const std::vector<Eigen::Vector3d>& uvh, const Eigen::Matrix2d& W, FitTerms terms, double height_scale,
                     Eigen::Matrix<double, 5, 1>& coef, double& residual) {
   const Eigen::Index rows = static_cast<Eigen::Index>(uvh.size());
-  const Eigen::Index cols = 5 + (terms.long_axis ? 2 : 0) + (terms.sphere ? 1 : 0);
+  const Eigen::Index implicit_cols = terms.implicit == FitTerms::kSurface ? 3 : terms.implicit == FitTerms::kSphere ? 1 : 0;
+  const Eigen::Index cols = 5 + (terms.long_axis ? 2 : 0) + implicit_cols;
   if (rows < cols) return false;
   Eigen::MatrixXd A(rows, cols);
   Eigen::VectorXd h(rows);
@@ -50,7 +54,12 @@ bool solve_whitened(const std::vector<Eigen::Vector3d>& uvh, const Eigen::Matrix
       A(i, col++) = v * v * v;
       A(i, col++) = v * v * v * v;
     }
-    if (terms.sphere) A(i, col++) = (p.z() / height_scale) * (p.z() / height_scale);
+    const double hn = p.z() / height_scale;
+    if (implicit_cols >= 1) A(i, col++) = hn * hn;
+    if (implicit_cols == 3) {
+      A(i, col++) = u * hn;
+      A(i, col++) = v * hn;
+    }
     h[i] = p.z();
   }
   const Eigen::JacobiSVD<Eigen::MatrixXd> svd(A, Eigen::ComputeThinU | Eigen::ComputeThinV);
@@ -67,19 +76,34 @@ bool solve_whitened(const std::vector<Eigen::Vector3d>& uvh, const Eigen::Matrix
   P << c[0], c[1] / 2, c[1] / 2, c[2];
   Eigen::Matrix2d P_uv = W.transpose() * P * W;
   const Eigen::Vector2d g_uv = W.transpose() * Eigen::Vector2d(c[3], c[4]);
-  if (terms.sphere) {
-    // h = q(u, v) + g . (u, v) + k h^2 with k = c / height_scale^2: differentiated twice at
-    // the vertex (h = 0, grad h = g), the graph's Hessian is 2 P + 2 k g g^T.
-    const double k = c[cols - 1] / (height_scale * height_scale);
-    P_uv += k * g_uv * g_uv.transpose();
+  if (implicit_cols > 0) {
+    // h = x^T P x + g . x + k h^2 + (w . x) h, with k and w in (u, v) and object units:
+    // differentiated twice at the vertex (h = 0, grad h = g), the graph's Hessian is
+    // 2 P + 2 k g g^T + w g^T + g w^T.
+    const Eigen::Index first = 5 + (terms.long_axis ? 2 : 0);
+    const double k = c[first] / (height_scale * height_scale);
+    const Eigen::Vector2d w = implicit_cols == 3 ? Eigen::Vector2d(W.transpose() * Eigen::Vector2d(c[first + 1], c[first + 2]) / height_scale)
+                                                 : Eigen::Vector2d::Zero();
+    // Every point on the sheet through the vertex: F = q + g . x + k h^2 + (w . x) h - h has
+    // dF/dh = 2 k h + w . x - 1, -1 at the vertex. On a sphere it reaches 0 at 90 degrees
+    // from the vertex and 0.5 at 120 (the 2-ring of a 6-segment cylinder); above 0.75 the
+    // points lie on the quadric's far side. At a step (heights 0 and s), a crease or a spike
+    // the terms had fitted the heights with both sheets, h = 0 and h = 1 / k, and P = 0: zero
+    // curvature where the quadric sees the feature.
+    for (const auto& p : uvh)
+      if (!(2 * k * p.z() + w.dot(p.head<2>()) - 1 <= 0.75)) {
+        residual = std::numeric_limits<double>::infinity();  // determined, but not the surface's
+        return true;
+      }
+    P_uv += k * g_uv * g_uv.transpose() + 0.5 * (w * g_uv.transpose() + g_uv * w.transpose());
   }
   coef << P_uv(0, 0), 2 * P_uv(0, 1), P_uv(1, 1), g_uv[0], g_uv[1];
   return coef.allFinite();
 }
 
-// What fit_quadric found: no fit, the quadric, the quadric with the sphere term, or the
+// What fit_quadric found: no fit, the quadric, the quadric with implicit terms, or the
 // quadric where the points cannot tell whether the sphere term is needed.
-enum class Fit { kNone, kQuadric, kSphere, kUndecided };
+enum class Fit { kNone, kQuadric, kImplicit, kUndecided };
 
 // Least-squares fit of h = a u^2 + b u v + c v^2 + d u + e v (coefficients in that order);
 // Fit::kNone when the points do not determine it. The linear terms absorb the difference between
@@ -107,11 +131,16 @@ enum class Fit { kNone, kQuadric, kSphere, kUndecided };
 // cylinder (its 2-ring 60 degrees wide) and 1.16 / r on a 16-segment one. A sphere of radius
 // r tangent at the vertex, u^2 + v^2 + h^2 = 2 r h, is exactly h = (u^2 + v^2) / (2 r) +
 // h^2 / (2 r), a circular cylinder likewise with the square of the coordinate across its
-// axis in place of u^2 + v^2, and a tilted vertex normal only adds linear terms: with a term k h^2 the fit is exact on spheres and cylinders
-// whatever the rings' width. h^2 is of fourth order in (u, v) and changes only what the fit
-// attributes to the second order (solve_whitened reads the graph's Taylor coefficients off
-// the implicit form). It is kept only where it fits the heights ten times better than the
-// quadric (below).
+// axis in place of u^2 + v^2, and a tilted vertex normal only adds linear terms: with a
+// term k h^2 the fit is exact on spheres and cylinders whatever the rings' width. With
+// (m u + n v) h as well it is the general quadric surface through the vertex, exact on cones,
+// spheroids and the other quadrics too (a circular cone of 8 segments: the quadric's error
+// 0.56 of its curvature, now 5e-7). These implicit terms are of third and fourth order in
+// (u, v) and change only what the fit attributes to the second order (solve_whitened reads
+// the graph's Taylor coefficients off the implicit form). They are kept only where they fit
+// the heights ten times better than the quadric (below), k h^2 alone first: on a sphere the
+// two more columns let rounding in (2e-3 of 1/r at a vertex of a 128 x 64 sphere with
+// irregular cells, against 1e-5 with k h^2 alone).
 Fit fit_quadric(const std::vector<Eigen::Vector3d>& uvh, Eigen::Matrix<double, 5, 1>& coef) {
   if (uvh.size() < 5) return Fit::kNone;
   Eigen::Matrix2d moments = Eigen::Matrix2d::Zero();
@@ -129,20 +158,25 @@ Fit fit_quadric(const std::vector<Eigen::Vector3d>& uvh, Eigen::Matrix<double, 5
   const double long_axis = 2;
   const bool elongated = lambda[1] > long_axis * long_axis * lambda[0];
   double residual = 0;
-  if (!(elongated && solve_whitened(uvh, W, {true, false}, 1, coef, residual)) && !solve_whitened(uvh, W, {false, false}, 1, coef, residual))
-    return Fit::kNone;
-  // Where the quadric leaves more than 1e-4 of the heights unexplained, the sphere term is
-  // tried (below that the quadric's curvature stays within 1e-3 of the sphere's: measured on
-  // a 128 x 64 sphere whose vertices were moved by up to 0.2 of a cell), and kept
-  // where it leaves a tenth of that or less: a sphere or a cylinder, fitted exactly. On the
-  // tori of Curvature.CoarseTorusKeepsTheQuadricsFit and of the test before it (160 x 64 down
-  // to 24 x 12) it left 0.47 of the quadric's residual at best, and its fits were worse than
+  Eigen::Index quadric_cols = 7;
+  if (!(elongated && solve_whitened(uvh, W, {true, FitTerms::kNone}, 1, coef, residual))) {
+    quadric_cols = 5;
+    if (!solve_whitened(uvh, W, {false, FitTerms::kNone}, 1, coef, residual)) return Fit::kNone;
+  }
+  // Where the quadric leaves more than 1e-4 of the heights unexplained, the implicit terms
+  // are tried (below that, the quadric's curvature was within 6e-3 of 1/r on 128 x 64 spheres
+  // whose vertices were moved by up to 0.2 of a cell), and kept where their residual per
+  // degree of freedom is a tenth of the quadric's or less, with three points to spare at
+  // least (with none, a fit of as many terms as points passes through them all). On the tori
+  // of Curvature.CoarseTorusKeepsTheQuadricsFit and of the test before it (160 x 64 down to
+  // 24 x 12) k h^2 left 0.47 of the quadric's residual at best, and its fits were worse than
   // the quadric's near the top of the tube (0.41 / r instead of 1.11 / r on 24 x 12, against
-  // 1 / r): a surface whose sections differ in radius is not one term's.
-  double norm = 0, height = 0;
+  // 1 / r): a torus is not a quadric.
+  double norm = 0, height = 0, h4 = 0;
   for (const auto& p : uvh) {
     norm += p.z() * p.z();
     height = std::max(height, std::abs(p.z()));
+    h4 += p.z() * p.z() * p.z() * p.z();
   }
   const double size = std::sqrt(lambda[1]);
   const bool misfit = residual > 1e-4 * std::sqrt(norm);
@@ -150,27 +184,47 @@ Fit fit_quadric(const std::vector<Eigen::Vector3d>& uvh, Eigen::Matrix<double, 5
   // matter: through a circle of radius rho at height h the paraboloid's curvature is the
   // sphere's times 1 + (h / rho)^2.
   if (!misfit && !(height > 1e-2 * size)) return Fit::kQuadric;
-  Eigen::Matrix<double, 5, 1> sphere_coef;
-  double sphere_residual = 0;
-  double h4 = 0;
-  for (const auto& p : uvh) h4 += p.z() * p.z() * p.z() * p.z();
   const double scale = std::sqrt(std::sqrt(h4 / static_cast<double>(uvh.size())));
-  const bool sphere_fits = solve_whitened(uvh, W, {false, true}, scale, sphere_coef, sphere_residual);
+  const double points = static_cast<double>(uvh.size());
+  // The fit with implicit `terms` (`cols` columns), where the points determine it with three
+  // to spare: its coefficients and its residual per degree of freedom (infinite when it is
+  // not determined or not the vertex's surface).
+  struct Implicit {
+    bool determined = false;
+    Eigen::Matrix<double, 5, 1> coef;
+    double residual = std::numeric_limits<double>::infinity();
+  };
+  auto fit = [&](FitTerms::Implicit terms, double cols) {
+    Implicit f;
+    double r = 0;
+    f.determined = points >= cols + 3 && solve_whitened(uvh, W, {false, terms}, scale, f.coef, r);
+    if (f.determined) f.residual = r / std::sqrt(points - cols);
+    return f;
+  };
+  const double quadric_residual = residual / std::sqrt(points - static_cast<double>(quadric_cols));
+  const Implicit sphere = fit(FitTerms::kSphere, 6);
   if (misfit) {
-    if (!sphere_fits || !(sphere_residual <= 0.1 * residual)) return Fit::kQuadric;
-    coef = sphere_coef;
-    return Fit::kSphere;
+    // The general surface where it fits ten times better than k h^2 alone too (a cylinder
+    // whose vertex normal tilts along its axis), else k h^2 where it fits ten times better
+    // than the quadric.
+    const Implicit surface = fit(FitTerms::kSurface, 8);
+    const Implicit& best = surface.residual <= 0.1 * sphere.residual || std::isinf(sphere.residual) ? surface : sphere;
+    if (std::isfinite(best.residual) && best.residual <= 0.1 * quadric_residual) {
+      coef = best.coef;
+      return Fit::kImplicit;
+    }
+    // Too few points to tell whether the implicit terms would fit (a coarse sphere's pole
+    // has 8 neighbours): the next ring decides.
+    return sphere.determined || surface.determined ? Fit::kQuadric : Fit::kUndecided;
   }
   // The quadric explains the heights, which are high enough for the sphere term to matter,
   // but the term is not determined: the points cannot tell the two apart (a pole's 1-ring,
   // on one circle, through which a sphere and a paraboloid both pass).
-  return sphere_fits ? Fit::kQuadric : Fit::kUndecided;
+  return sphere.determined ? Fit::kQuadric : Fit::kUndecided;
 }
 
-// A thread's working memory for fit_vertex: `mark` holds, per vertex, the last vertex whose
-// neighbourhood took it in (vertices are fitted once each, so a stale mark never matches).
+// fit_vertex's working memory, reused from vertex to vertex.
 struct FitScratch {
-  std::vector<int> mark;
   std::vector<VertexHandle> ring;
   std::vector<Eigen::Vector3d> uvh;
 };
@@ -178,7 +232,6 @@ struct FitScratch {
 // fit_curvature's work for vertex v, which depends on v's rings only (so the result does not
 // depend on the threads).
 VertexCurvature fit_vertex(const Mesh& mesh, VertexHandle v, FitScratch& scratch) {
-  std::vector<int>& mark = scratch.mark;
   std::vector<VertexHandle>& ring = scratch.ring;
   std::vector<Eigen::Vector3d>& uvh = scratch.uvh;
   VertexCurvature out;
@@ -193,13 +246,13 @@ VertexCurvature fit_vertex(const Mesh& mesh, VertexHandle v, FitScratch& scratch
   out.d2 = OpenMesh::vector_cast<Vec3f>(b);
   // Gather the 1-ring, then grow ring by ring (2, then 3) while the neighbourhood does not
   // determine the fit, or cannot tell whether it needs the sphere term.
+  // Rings hold tens of vertices (a few hundred around a pole): a linear search keeps each
+  // once, in the order found, without per-vertex marks over the whole mesh.
   ring.clear();
-  mark[static_cast<size_t>(v.idx())] = v.idx();
-  for (auto w : mesh.vv_range(v)) {
-    if (mark[static_cast<size_t>(w.idx())] == v.idx()) continue;
-    mark[static_cast<size_t>(w.idx())] = v.idx();
-    ring.push_back(w);
-  }
+  auto take = [&](VertexHandle w) {
+    if (w != v && std::find(ring.begin(), ring.end(), w) == ring.end()) ring.push_back(w);
+  };
+  for (auto w : mesh.vv_range(v)) take(w);
   Eigen::Matrix<double, 5, 1> coef, wider;
   int rings = 0;
   bool undecided = false;  // the fit's ring cannot tell a sphere from its quadric
@@ -208,11 +261,7 @@ VertexCurvature fit_vertex(const Mesh& mesh, VertexHandle v, FitScratch& scratch
     if (r >= 2) {
       const size_t end = ring.size();
       for (size_t i = frontier; i < end; ++i)
-        for (auto w : mesh.vv_range(ring[i])) {
-          if (mark[static_cast<size_t>(w.idx())] == v.idx()) continue;
-          mark[static_cast<size_t>(w.idx())] = v.idx();
-          ring.push_back(w);
-        }
+        for (auto w : mesh.vv_range(ring[i])) take(w);
       frontier = end;
     }
     if (r == 1 && ring.size() < 8) continue;  // 5 unknowns: want real redundancy
@@ -226,10 +275,10 @@ VertexCurvature fit_vertex(const Mesh& mesh, VertexHandle v, FitScratch& scratch
       rings = fit == Fit::kNone ? 0 : r;
       undecided = fit == Fit::kUndecided;
     } else {
-      // The next ring decides an undecided fit, and replaces it only with a sphere's: the
-      // poles of a coarse UV sphere (16 x 8: the paraboloid through the pole's ring gave
+      // The next ring decides an undecided fit, and replaces it only with an implicit one:
+      // the poles of a coarse UV sphere (16 x 8: the paraboloid through the pole's ring gave
       // 1.04 / r) get the sphere, the apex of a paraboloid keeps its 1-ring.
-      if (fit_quadric(uvh, wider) == Fit::kSphere) {
+      if (fit_quadric(uvh, wider) == Fit::kImplicit) {
         coef = wider;
         rings = r;
       }
@@ -272,10 +321,9 @@ VertexCurvature fit_vertex(const Mesh& mesh, VertexHandle v, FitScratch& scratch
 
 std::vector<VertexCurvature> fit_curvature(const Mesh& mesh) {
   std::vector<VertexCurvature> out(mesh.n_vertices());
-  tbb::enumerable_thread_specific<FitScratch> scratch([&] { return FitScratch{std::vector<int>(mesh.n_vertices(), -1), {}, {}}; });
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, mesh.n_vertices(), 1024), [&](const tbb::blocked_range<size_t>& range) {
-    FitScratch& local = scratch.local();
-    for (size_t i = range.begin(); i != range.end(); ++i) out[i] = fit_vertex(mesh, VertexHandle(static_cast<int>(i)), local);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, mesh.n_vertices(), 256), [&](const tbb::blocked_range<size_t>& range) {
+    FitScratch scratch;
+    for (size_t i = range.begin(); i != range.end(); ++i) out[i] = fit_vertex(mesh, VertexHandle(static_cast<int>(i)), scratch);
   });
   return out;
 }

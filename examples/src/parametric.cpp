@@ -2,6 +2,7 @@
 
 #include <array>
 #include <cmath>
+#include <stdexcept>
 #include <vector>
 
 namespace meso {
@@ -31,6 +32,7 @@ Mesh make_parametric_surface(int columns, int rows, const std::function<Vec3f(do
 }
 
 Mesh make_surface_with_poles(int columns, int rows, const std::function<Vec3f(double, double)>& point) {
+  if (columns < 3 || rows < 2) throw std::invalid_argument("make_surface_with_poles: needs columns >= 3 and rows >= 2");
   Mesh m;
   std::vector<VertexHandle> ring;
   const VertexHandle south = m.add_vertex(point(0, 0));

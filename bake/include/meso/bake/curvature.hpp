@@ -2,8 +2,9 @@
 // 5.1, eq. 13): in the vertex's frame (normal n, tangent plane axes), the neighbours'
 // heights over the tangent plane are fitted by least squares with h = a u^2 + b u v + c v^2,
 // extended by linear terms d u + e v so that an imprecise vertex normal does not bias it, and
-// by k h^2 where that fits the heights far better, which makes the fit exact on spheres and
-// circular cylinders however coarse the mesh.
+// by the implicit terms k h^2 (+ (m u + n v) h) where they fit the heights far better: the
+// fit is then the quadric surface through the vertex, exact on spheres, circular cylinders
+// and cones however coarse the mesh.
 #pragma once
 
 #include "meso/core/mesh.hpp"
@@ -31,11 +32,12 @@ struct VertexCurvature {
 // which keep that axis's higher-order terms out of the curvature across it), else the
 // 2-ring, else the 3-ring (the end of a thin strip, whose 2-ring lies in two rows); a vertex
 // whose 3-ring cannot determine it gets zero curvature and rings = 0, as does one whose
-// curvature overflows float. The term k h^2 is kept where it leaves a tenth of the quadric's
-// residual or less (spheres and cylinders to float rounding: 6 to 32 segments within 4e-6
-// of 1/r; a 24 x 12 torus keeps the quadric's fit); a ring whose heights it would change but
-// which cannot determine it (a pole's 1-ring, on one circle) lets the next ring decide, whose
-// fit replaces it only with the term. Needs vertex normals. Curvatures
+// curvature overflows float. The implicit terms are kept where they leave a tenth of the
+// quadric's residual or less, k h^2 alone tried first (spheres, cylinders and cones of 6 to
+// 32 segments to float rounding, within 4e-6 of their curvature; a 24 x 12 torus keeps the
+// quadric's fit); a ring whose heights k h^2 would change but which cannot determine it (a
+// pole's 1-ring, on one circle) lets the next ring decide, whose fit replaces it only with
+// an implicit one. Needs vertex normals. Curvatures
 // are those of the fitted surface at the vertex (shape operator I^-1 II); directions are
 // its principal directions projected onto the vertex normal's tangent plane.
 std::vector<VertexCurvature> fit_curvature(const Mesh& mesh);

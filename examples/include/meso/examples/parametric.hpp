@@ -18,9 +18,10 @@ Mesh make_parametric_surface(int columns, int rows, const std::function<Vec3f(do
 // A closed surface of revolution about z on a UV grid with its poles: point(theta, phi) at
 // polar angle theta in [0, pi] (0: the south pole) and azimuth phi in [0, 2 pi). Each pole is
 // one vertex (the first and the last), joined to all `columns` vertices of the first ring of
-// latitude; the other vertices lie on a triangulated grid of `rows` - 1 rings (valence 6).
-// Wound counter-clockwise seen from outside for a point() like the sphere's
-// (r sin theta cos phi, r sin theta sin phi, -r cos theta); no UVs; angle-weighted normals.
+// latitude; the other vertices lie on a triangulated grid of `rows` - 1 rings (valence 6, 5
+// on the rings next to the poles). Wound counter-clockwise seen from outside for a point()
+// like the sphere's (r sin theta cos phi, r sin theta sin phi, -r cos theta); no UVs;
+// angle-weighted normals. Needs columns >= 3 and rows >= 2 (std::invalid_argument).
 Mesh make_surface_with_poles(int columns, int rows, const std::function<Vec3f(double, double)>& point);
 
 // A torus (major radius 1, minor 0.35) with a gentle smooth wave on the tube, named "torus":
