@@ -25,6 +25,7 @@
 // Run: build/release/bench/curvature_peers [--quick]   (--quick: one timing run per row)
 #include "meso/bake/curvature.hpp"
 #include "meso/core/mesh.hpp"
+#include "meso/examples/brick_wall.hpp"
 #include "meso/examples/parametric.hpp"
 
 #include <CGAL/Monge_via_jet_fitting.h>
@@ -309,6 +310,24 @@ int main(int argc, char** argv) {
       const auto [fit, seconds] = timed([&] { return cgal_fit(s.mesh, config); }, quick);
       row(s, config.name, measure(s, fit), seconds);
     }
+  }
+
+  // meso's fit alone on two large meshes: the brick wall (creases everywhere, where the
+  // implicit terms are tried and refused) and a fine sphere (where the quadric fits).
+  std::printf("\n| mesh | vertices | meso, 1 thread (s) | meso, %d threads (s) |\n|---|---:|---:|---:|\n", threads);
+  const std::pair<const char*, Mesh> large[] = {
+      {"brick wall (make_brick_wall defaults)", make_brick_wall(BrickWallOptions{})},
+      {"UV sphere 512 x 256, no poles", make_parametric_surface(512, 256, [](double u, double t) {
+         return on_sphere(1.0, kPi * (0.02 + 0.96 * t), 2 * kPi * u);
+       }, true, false)}};
+  for (const auto& [name, mesh] : large) {
+    const double all_seconds = timed([&] { return fit_curvature(mesh); }, quick).second;
+    double one_seconds = 0;
+    {
+      tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
+      one_seconds = timed([&] { return fit_curvature(mesh); }, quick).second;
+    }
+    std::printf("| %s | %zu | %.3f | %.3f |\n", name, mesh.n_vertices(), one_seconds, all_seconds);
   }
   return 0;
 }

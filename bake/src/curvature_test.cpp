@@ -91,15 +91,21 @@ TEST(Curvature, StretchedCellsFitLikeSquareOnes) {
   }
 }
 
-TEST(Curvature, TorusMatchesItsClosedForm) {
-  // Tube radius r around a circle of radius R: k_tube = 1/r, k_ring = cos(v) / (R + r cos(v)),
-  // where v = 0 on the outer equator.
-  const double R = 3.0, r = 1.0;
-  const Mesh m = test::make_parametric(160, 64, [&](double s, double t) {
+// A torus about z: tube radius r around a circle of radius R, columns around z, rows around
+// the tube.
+Mesh torus(double R, double r, int columns, int rows) {
+  return test::make_parametric(columns, rows, [&](double s, double t) {
     const double u = 2 * kPi * s, v = 2 * kPi * t;
     const double w = R + r * std::cos(v);
     return Vec3f(float(w * std::cos(u)), float(w * std::sin(u)), float(r * std::sin(v)));
   }, true, true);
+}
+
+TEST(Curvature, TorusMatchesItsClosedForm) {
+  // Tube radius r around a circle of radius R: k_tube = 1/r, k_ring = cos(v) / (R + r cos(v)),
+  // where v = 0 on the outer equator.
+  const double R = 3.0, r = 1.0;
+  const Mesh m = torus(R, r, 160, 64);
   // make_parametric's winding decides which way the normals face (outward here); the
   // expected signs follow vertex 0's normal.
   const auto c = fit_curvature(m);
@@ -423,11 +429,7 @@ TEST(Curvature, ImplicitTermsNeedSparePointsAndTheVertexsSheet) {
 // gives k1 = 1.11 / r; with the sphere term it gave 0.41 / r.
 TEST(Curvature, CoarseTorusKeepsTheQuadricsFit) {
   const double R = 3.0, r = 1.0;
-  const Mesh m = test::make_parametric(24, 12, [&](double s, double t) {
-    const double u = 2 * kPi * s, v = 2 * kPi * t;
-    const double w = R + r * std::cos(v);
-    return Vec3f(float(w * std::cos(u)), float(w * std::sin(u)), float(r * std::sin(v)));
-  }, true, true);
+  const Mesh m = torus(R, r, 24, 12);
   const auto c = fit_curvature(m);
   size_t tops = 0;
   for (auto vh : m.vertices()) {
