@@ -32,12 +32,13 @@ struct VertexCurvature {
 // which keep that axis's higher-order terms out of the curvature across it), else the
 // 2-ring, else the 3-ring (the end of a thin strip, whose 2-ring lies in two rows); a vertex
 // whose 3-ring cannot determine it gets zero curvature and rings = 0, as does one whose
-// curvature overflows float. The implicit terms are kept where they leave a tenth of the
-// quadric's residual or less, k h^2 alone tried first (spheres, cylinders and cones of 6 to
-// 32 segments to float rounding, within 4e-6 of their curvature; a 24 x 12 torus keeps the
-// quadric's fit); a ring whose heights k h^2 would change but which cannot determine it (a
-// pole's 1-ring, on one circle) lets the next ring decide, whose fit replaces it only with
-// an implicit one. Needs vertex normals. Curvatures
+// curvature overflows float. The implicit terms are kept where their residual per degree of
+// freedom is a tenth of the quadric's or less, with three points to spare and every point on
+// the vertex's sheet of the fitted quadric, k h^2 alone tried first (spheres, cylinders and
+// cones of 6 to 32 segments to float rounding, within 4e-6 of their curvature; a 24 x 12
+// torus, creases, steps and spikes keep the quadric's fit); a ring too small to tell whether
+// they are needed (a pole's 1-ring, on one circle) lets the next ring decide, whose fit
+// replaces it only with an implicit one. Needs vertex normals. Curvatures
 // are those of the fitted surface at the vertex (shape operator I^-1 II); directions are
 // its principal directions projected onto the vertex normal's tangent plane.
 std::vector<VertexCurvature> fit_curvature(const Mesh& mesh);
