@@ -167,7 +167,8 @@ Fit fit_quadric(const std::vector<Eigen::Vector3d>& uvh, Eigen::Matrix<double, 5
   // are tried (below that, the quadric's curvature was within 6e-3 of 1/r on 128 x 64 spheres
   // whose vertices were moved by up to 0.2 of a cell), and kept where their residual per
   // degree of freedom is a tenth of the quadric's or less, with three points to spare at
-  // least (with none, a fit of as many terms as points passes through them all). On the tori
+  // least (with none, a fit of as many terms as points passes through them all; three is a
+  // margin chosen, not measured). On the tori
   // of Curvature.CoarseTorusKeepsTheQuadricsFit and of the test before it (160 x 64 down to
   // 24 x 12) k h^2 left 0.47 of the quadric's residual at best, and its fits were worse than
   // the quadric's near the top of the tube (0.41 / r instead of 1.11 / r on 24 x 12, against
