@@ -417,6 +417,7 @@ TEST(Curvature, ImplicitTermsNeedSparePointsAndTheVertexsSheet) {
       const Vec3f p = m.point(v);
       if (m.is_boundary(v) || !f.on(p[0], p[1])) continue;
       const auto& k = c[static_cast<size_t>(v.idx())];
+      // Measured: 5.7 and more on all three; the two-sheet fits gave 1e-14.
       EXPECT_GT(std::abs(k.k1) + std::abs(k.k2), 0.5) << f.name << ", vertex " << v.idx() << " at x = " << p[0];
       ++seen;
     }
