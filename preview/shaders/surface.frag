@@ -1,14 +1,40 @@
 #line 1 7
 // The parallax family and main (see surface_common.glsl for the pieces and conventions).
 
+// The map from object-space vectors to the ray's (u, v, h) coordinates at this fragment.
+// meso bake's displaced surface is P(uv) + h N(uv), N the interpolated unit normal (bake.hpp).
+// About the fragment's base point P0 (at v_uv) it is, to first order, P0 + J duv + h nn, with
+// J = [dp/du dp/dv] the triangle's (exact: UVs are affine over a triangle) and nn the
+// normal here; a ray P0 + s V is then (duv, h) = s M^-1 V, M = [dp/du dp/dv nn]: straight in
+// (u, v, h), as every tracer below assumes. An orthonormalised tangent frame (t, b, n scaled
+// by |dp/du|, |dp/dv|) equals M^-1 only where the UV axes are orthogonal and nn is the face
+// normal: on the demo's reduced base it put 2.6 % of the pixels a texel or more from the
+// reference's visible point at 60 degrees, against 0.8 % with M^-1 (docs/benchmarks.md).
+// The frame remains the fallback where J is unknown (degenerate UVs, the per-vertex
+// methods' draws) or M is nearly singular (nn within ~3 degrees of the triangle's plane).
+mat3 uvh_from_object(vec3 tn, vec3 bn, vec3 nn) {
+  mat3 frame = transpose(mat3(tn / max(v_uv_scale.x, 1e-20), bn / max(v_uv_scale.y, 1e-20), nn));
+  if (u_face_jacobians == 0 || gl_PrimitiveID < 0 || 2 * gl_PrimitiveID + 1 >= face_jacobian.length()) return frame;
+  vec4 du = face_jacobian[2 * gl_PrimitiveID], dv = face_jacobian[2 * gl_PrimitiveID + 1];
+  float lu = length(du.xyz), lv = length(dv.xyz);
+  if (du.w == 0.0 || !(lu > 0.0) || !(lv > 0.0)) return frame;
+  // M^-1 by cofactors, with J's columns normalised first (no float overflow or underflow
+  // for huge or tiny meshes): rows (b x n, n x a, a x b) / det, det = a . (b x n).
+  vec3 a = du.xyz / lu, b = dv.xyz / lv;
+  vec3 ab = cross(a, b);
+  float det = dot(nn, ab);
+  if (!(abs(det) > 0.05 * length(ab))) return frame;
+  return transpose(mat3(cross(b, nn) / (det * lu), cross(nn, a) / (det * lv), ab / det));
+}
+
 // Self-shadowing (survey section 6): the fraction of the light seen from the visible point
 // (uv, its height h). A shadow ray toward light direction L (object space) advances per unit
-// length by l = (L.t / |dp/du|, L.b / |dp/dv|, L.n) in (u, v, h), as the view ray does; it is
-// sampled at u_shadow_steps points up to the top of the height range, and blocked where the
-// height map rises above it (by more than a thousandth of the range, so the surface does not
-// shadow itself). Soft shadows average 8 rays toward points of a disc light around L.
-float shadow_ray(vec2 uv, float h, vec3 L, vec3 tn, vec3 bn, vec3 nn) {
-  vec3 l = vec3(dot(L, tn) / max(v_uv_scale.x, 1e-20), dot(L, bn) / max(v_uv_scale.y, 1e-20), dot(L, nn));
+// length by l = to_uvh L in (u, v, h), as the view ray does; it is sampled at u_shadow_steps
+// points up to the top of the height range, and blocked where the height map rises above it
+// (by more than a thousandth of the range, so the surface does not shadow itself). Soft
+// shadows average 8 rays toward points of a disc light around L.
+float shadow_ray(vec2 uv, float h, vec3 L, mat3 to_uvh) {
+  vec3 l = to_uvh * L;
   if (l.z <= 1e-6) return 1.0;  // the light is at or below the base plane: Lambert's term decides
   float s_top = (u_h_max - h) / l.z;
   float bias = 1e-3 * (u_h_max - u_h_min);
@@ -20,9 +46,9 @@ float shadow_ray(vec2 uv, float h, vec3 L, vec3 tn, vec3 bn, vec3 nn) {
   return 1.0;
 }
 
-float light_visibility(vec2 uv, vec3 tn, vec3 bn, vec3 nn) {
+float light_visibility(vec2 uv, mat3 to_uvh) {
   float h = height_lookup(uv);
-  if (u_shadows == 1) return shadow_ray(uv, h, u_light, tn, bn, nn);
+  if (u_shadows == 1) return shadow_ray(uv, h, u_light, to_uvh);
   // A frame around the light direction; 8 directions on a circle at 0.7 of the light's radius.
   vec3 a = normalize(abs(u_light.z) < 0.9 ? cross(u_light, vec3(0, 0, 1)) : cross(u_light, vec3(1, 0, 0)));
   vec3 c = cross(u_light, a);
@@ -30,7 +56,7 @@ float light_visibility(vec2 uv, vec3 tn, vec3 bn, vec3 nn) {
   float sum = 0.0;
   for (int k = 0; k < 8; ++k) {
     float phi = 6.2831853 * float(k) / 8.0;
-    sum += shadow_ray(uv, h, normalize(u_light + r * (cos(phi) * a + sin(phi) * c)), tn, bn, nn);
+    sum += shadow_ray(uv, h, normalize(u_light + r * (cos(phi) * a + sin(phi) * c)), to_uvh);
   }
   return sum / 8.0;
 }
@@ -53,16 +79,14 @@ void main() {
   }
   vec3 b = v_sign * cross(n, t);
 
-  // Orthonormal frame for the ray, scaled to UV units.
+  // Orthonormal frame (vdm's angles, and uvh_from_object's fallback).
   vec3 tn = normalize(t_perp);
   vec3 bn = v_sign * cross(nn, tn);
   vec3 view = normalize(v_position - u_eye);  // from the eye toward the surface
-  vec3 dir = vec3(dot(view, tn) / max(v_uv_scale.x, 1e-20), dot(view, bn) / max(v_uv_scale.y, 1e-20), dot(view, nn));
-
-  // Unit view vector toward the viewer in the orthonormal tangent frame (the survey's V), and
-  // its advance per unit length in (u, v, h).
-  vec3 to_eye = -vec3(dot(view, tn), dot(view, bn), dot(view, nn));
-  vec3 to_eye_uvh = vec3(to_eye.xy / max(v_uv_scale, vec2(1e-20)), to_eye.z);
+  mat3 to_uvh = uvh_from_object(tn, bn, nn);
+  vec3 dir = to_uvh * view;  // the view ray's advance per unit length in (u, v, h)
+  // The unit vector toward the viewer (the survey's V), per unit length in (u, v, h).
+  vec3 to_eye_uvh = -dir;
 
   vec2 uv = v_uv;
   float amortised_fetches = 0.0;  // a share of work done outside this fragment (DIG's grid pass)
@@ -70,7 +94,10 @@ void main() {
   // With silhouettes on a curved base (section 5.1) the base falls away from the tangent
   // plane by c x^2 / 2 at horizontal distance x, c the curvature along the view: the ray's
   // height over the bent base is z(s) = dir.z s + bend s^2, bend = c sin^2(theta) / 2.
-  float bend = u_silhouettes != 0 ? 0.5 * view_curvature(view, nn) * (1.0 - dir.z * dir.z) : 0.0;
+  // (sin(theta) from the normal: dir.z, the height per unit length, exceeds 1 where nn leans
+  // off the triangle's plane.)
+  float cos_view = dot(view, nn);
+  float bend = u_silhouettes != 0 ? 0.5 * view_curvature(view, nn) * (1.0 - cos_view * cos_view) : 0.0;
   bool escaped = false;  // a safe method's ray left the surface without a hit
   if (u_method == kParallax && facing) {
     // Section 4.1.2: assume the height at (u, v) holds everywhere.
@@ -188,7 +215,7 @@ void main() {
   N = dot(N, N) > 1e-20 ? normalize(N) : nn;
   if (!gl_FrontFacing) N = -N;
   float diffuse = max(dot(N, u_light), 0.0);
-  if (u_shadows != 0 && diffuse > 0.0) diffuse *= light_visibility(uv, tn, bn, nn);
+  if (u_shadows != 0 && diffuse > 0.0) diffuse *= light_visibility(uv, to_uvh);
   vec3 albedo = vec3(0.78, 0.74, 0.70);
   vec3 color = albedo * (0.12 + 0.88 * diffuse);
   out_color = vec4(pow(color, vec3(1.0 / 2.2)), 1.0);

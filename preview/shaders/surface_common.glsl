@@ -8,15 +8,22 @@
 // pom 4.4.2, cone 4.3.5, relaxed-cone 4.4.3, pyramid 4.3.3, sphere-tracing 4.3.4, vdm 6.3;
 // dig: the depth-interval-grid paper (dig.glsl). dstream (dstream.vert) is per vertex.
 // Heights are in object units along the base normal, positive outward (meso bake's
-// displacement.exr), in [u_h_min, u_h_max]. The ray is expressed in (u, v, h) coordinates:
-// per unit of object-space length it advances dot(V,t)/|dp/du| in u, dot(V,b)/|dp/dv| in v
-// and dot(V,n) in h (survey eq. 5-7 with an orthonormalised frame).
+// displacement.exr), in [u_h_min, u_h_max]. The ray is expressed in (u, v, h) coordinates,
+// straight there: surface.frag's uvh_from_object() (survey eq. 5-7, with the triangle's own
+// dp/du and dp/dv instead of an orthonormalised frame).
 in vec3 v_position;
 in vec3 v_normal;
 in vec3 v_tangent;
 flat in float v_sign;
 in vec2 v_uv;
 in vec2 v_uv_scale;
+
+// Per base triangle, read at gl_PrimitiveID when u_face_jacobians is 1 (the per-pixel
+// methods' draw of the base, whose primitive t is face t): dp/du in .xyz of entry 2t, dp/dv
+// in .xyz of entry 2t + 1, object units per UV unit; .w of entry 2t is 0 where the
+// triangle's UVs are degenerate (renderer.cpp, face_jacobians()).
+layout(std430, binding = 3) readonly buffer FaceJacobians { vec4 face_jacobian[]; };
+uniform int u_face_jacobians;
 
 uniform sampler2D u_height;   // R: displacement, object units
 uniform sampler2D u_normal;   // RGB: tangent-space normal encoded n * 0.5 + 0.5

@@ -543,6 +543,34 @@ int subdivide_for_mesh(const std::vector<float>& verts, const std::vector<uint32
   return k;
 }
 
+// Per triangle of `tris`, the derivatives of position by UV, dp/du and dp/dv (object units per
+// UV unit), from the per-corner floats the vertex shader reads (position at 0, UV at 6 of
+// each `stride`): 8 floats per triangle, (dp/du, valid) and (dp/dv, 0), the layout of
+// surface_common.glsl's FaceJacobians. Exact, since UVs are affine over a triangle:
+// [e1 e2] = J [f1 f2] for the edges e in space and f in UV, so J = [e1 e2] [f1 f2]^-1,
+// in double. Valid = 0 where the UV triangle has no area (J is then undefined).
+std::vector<float> face_jacobians(const std::vector<float>& verts, const std::vector<uint32_t>& tris, size_t stride) {
+  std::vector<float> out(tris.size() / 3 * 8, 0.0f);
+  for (size_t t = 0; t < tris.size() / 3; ++t) {
+    const float* c[3] = {&verts[tris[3 * t] * stride], &verts[tris[3 * t + 1] * stride], &verts[tris[3 * t + 2] * stride]};
+    const double f1u = static_cast<double>(c[1][6]) - c[0][6], f1v = static_cast<double>(c[1][7]) - c[0][7];
+    const double f2u = static_cast<double>(c[2][6]) - c[0][6], f2v = static_cast<double>(c[2][7]) - c[0][7];
+    const double det = f1u * f2v - f2u * f1v;
+    if (!(std::abs(det) > 1e-12 * std::hypot(f1u, f1v) * std::hypot(f2u, f2v))) continue;
+    float* o = &out[t * 8];
+    for (int k = 0; k < 3; ++k) {
+      const double e1 = static_cast<double>(c[1][k]) - c[0][k], e2 = static_cast<double>(c[2][k]) - c[0][k];
+      // [f1 f2]^-1 = [[f2v, -f2u], [-f1v, f1u]] / det.
+      o[k] = static_cast<float>((e1 * f2v - e2 * f1v) / det);
+      o[4 + k] = static_cast<float>((e2 * f1u - e1 * f2u) / det);
+    }
+    const bool finite = std::all_of(o, o + 3, [](float v) { return std::isfinite(v); }) &&
+                        std::all_of(o + 4, o + 7, [](float v) { return std::isfinite(v); });
+    o[3] = finite ? 1.0f : 0.0f;
+  }
+  return out;
+}
+
 }  // namespace
 
 SurfaceRenderer::SurfaceRenderer(const Mesh& base, const PreviewMaps& maps) : base_(base) {
@@ -608,6 +636,15 @@ SurfaceRenderer::SurfaceRenderer(const Mesh& base, const PreviewMaps& maps) : ba
     glBindVertexArray(0);
   };
   fill_vertex_array(verts, split.triangles, vbo_, ibo_);
+  {
+    const std::vector<float> jacobians = face_jacobians(verts, split.triangles, kStride);
+    glGenBuffers(1, &face_jacobians_);
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, face_jacobians_);
+    // An empty mesh still gets a buffer to bind (one invalid entry pair).
+    const std::vector<float> none(8, 0.0f);
+    const std::vector<float>& data = jacobians.empty() ? none : jacobians;
+    glBufferData(GL_SHADER_STORAGE_BUFFER, static_cast<GLsizeiptr>(data.size() * sizeof(float)), data.data(), GL_STATIC_DRAW);
+  }
   {
     std::vector<float> cut_verts;
     std::vector<uint32_t> cut_tris;
@@ -924,6 +961,7 @@ SurfaceRenderer::~SurfaceRenderer() {
   if (!dstream_vertices_.empty()) glDeleteBuffers(static_cast<GLsizei>(dstream_vertices_.size()), dstream_vertices_.data());
   if (!dstream_indices_.empty()) glDeleteBuffers(static_cast<GLsizei>(dstream_indices_.size()), dstream_indices_.data());
   glDeleteBuffers(1, &vertex_work_);
+  glDeleteBuffers(1, &face_jacobians_);
   glDeleteProgram(tess_program_);
   glDeleteFramebuffers(1, &dig_fbo_);
   glDeleteTextures(1, &dig_tex_);
@@ -962,6 +1000,9 @@ void SurfaceRenderer::draw(const PreviewOptions& o, int width, int height) {
   glUniform3f(glGetUniformLocation(prog, "u_eye"), pose.eye[0], pose.eye[1], pose.eye[2]);
   glUniform3f(glGetUniformLocation(prog, "u_light"), pose.light[0], pose.light[1], pose.light[2]);
   glUniform1i(glGetUniformLocation(prog, "u_method"), method_index(o.method));
+  // The per-pixel methods draw face t as primitive t: its dp/du, dp/dv (face_jacobians()).
+  glUniform1i(glGetUniformLocation(prog, "u_face_jacobians"), per_vertex ? 0 : 1);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, face_jacobians_);
   glUniform1i(glGetUniformLocation(prog, "u_iterations"), o.iterations);
   glUniform1i(glGetUniformLocation(prog, "u_shade"), static_cast<int>(o.shade));
   glUniform1i(glGetUniformLocation(prog, "u_shadows"), static_cast<int>(o.shadows));

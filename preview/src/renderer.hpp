@@ -74,6 +74,7 @@ class SurfaceRenderer {
   float pyramid_scale_ = 0, pyramid_bias_ = 0;
   bool pyramid_wrap_ = false;
   GLuint tess_program_ = 0, vertex_work_ = 0;  // per-vertex methods; their fetch counter (SSBO)
+  GLuint face_jacobians_ = 0;  // SSBO: dp/du, dp/dv per base face (per-pixel methods' ray frame)
   bool last_per_vertex_ = false;
   GLuint dig_fbo_ = 0, dig_tex_ = 0, dig_depth_ = 0;
   int dig_width_ = 0, dig_height_ = 0;
