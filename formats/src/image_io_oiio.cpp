@@ -191,9 +191,41 @@ Image read_level(OIIO::ImageInput& in, const std::string& name, int level, int s
 }
 
 
+// An image whose data window is not its display window (a compositor's auto-crop, or
+// overscan; any format OIIO reads offsets for) is placed in its display window, the frame the
+// UVs map: samples outside the data window are zero (OpenEXR's meaning of "no data"), and
+// data outside the display window is cut away. Without this a cropped map was read at the
+// crop's size and stretched over the whole UV square.
+Image in_display_window(Image data, const OIIO::ImageSpec& spec, const std::string& name) {
+  if (spec.x == spec.full_x && spec.y == spec.full_y && spec.width == spec.full_width && spec.height == spec.full_height) return data;
+  if (spec.full_width <= 0 || spec.full_height <= 0) return data;  // no display window recorded
+  const double bytes = static_cast<double>(spec.full_width) * spec.full_height * data.channels * sizeof(float), memory = physical_memory_bytes();
+  if (memory > 0 && bytes > memory) {
+    char text[200];
+    std::snprintf(text, sizeof text, "its display window is %d x %d pixels of %d channels: %.1f GB as floats, more than this machine's %.1f GB",
+                  spec.full_width, spec.full_height, data.channels, bytes / 1e9, memory / 1e9);
+    throw InputError(name, text);
+  }
+  Image out(spec.full_width, spec.full_height, data.channels, 0.0f);
+  out.metadata = std::move(data.metadata);
+  // Data pixel (x, y) is display pixel (x + spec.x - full_x, y + spec.y - full_y); 64-bit
+  // arithmetic, since the offsets are any int.
+  const int64_t dx = static_cast<int64_t>(spec.x) - spec.full_x, dy = static_cast<int64_t>(spec.y) - spec.full_y;
+  const int64_t x0 = std::max<int64_t>(0, -dx), x1 = std::min<int64_t>(data.width, out.width - dx);
+  const int64_t y0 = std::max<int64_t>(0, -dy), y1 = x0 < x1 ? std::min<int64_t>(data.height, out.height - dy) : y0;
+  const size_t c = static_cast<size_t>(data.channels);
+  for (int64_t y = y0; y < y1; ++y) {
+    const float* from = &data.pixels[(static_cast<size_t>(y) * static_cast<size_t>(data.width) + static_cast<size_t>(x0)) * c];
+    float* to = &out.pixels[(static_cast<size_t>(y + dy) * static_cast<size_t>(out.width) + static_cast<size_t>(x0 + dx)) * c];
+    std::copy(from, from + static_cast<size_t>(x1 - x0) * c, to);
+  }
+  return out;
+}
+
 Image read_image(const fs::path& path) {
   auto in = open_input(path);
-  return read_level(*in, path.string(), 0);
+  Image data = read_level(*in, path.string(), 0);
+  return in_display_window(std::move(data), in->spec(), path.string());
 }
 
 

@@ -8,6 +8,8 @@
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfHeader.h>
 #include <OpenEXR/ImfMultiPartInputFile.h>
+#include <OpenEXR/ImfFrameBuffer.h>
+#include <OpenEXR/ImfOutputFile.h>
 #include <gtest/gtest.h>
 
 #include <limits>
@@ -321,6 +323,63 @@ TEST(ImageIo, MipLevelsRoundTripInOneExr) {
   // Sizes that do not halve are refused.
   levels[1] = ramp(5, 3, 2);
   EXPECT_THROW(write_image_levels(levels, dir / "q.exr", PixelFormat::float32), InternalError);
+}
+
+// An EXR of one float channel Y whose data window (x0, y0)-(x1, y1) differs from its display
+// window (fx0, fy0)-(fx1, fy1), written with OpenEXR itself; sample (x, y) = 1 + x + 100 y in
+// the file's pixel coordinates.
+void write_windowed_exr(const std::filesystem::path& path, int fx0, int fy0, int fx1, int fy1, int x0, int y0, int x1, int y1) {
+  Imf::Header header(Imath::Box2i({fx0, fy0}, {fx1, fy1}), Imath::Box2i({x0, y0}, {x1, y1}));
+  header.channels().insert("Y", Imf::Channel(Imf::FLOAT));
+  const int w = x1 - x0 + 1, h = y1 - y0 + 1;
+  std::vector<float> samples(static_cast<size_t>(w * h));
+  for (int y = y0; y <= y1; ++y)
+    for (int x = x0; x <= x1; ++x) samples[static_cast<size_t>((y - y0) * w + (x - x0))] = static_cast<float>(1 + x + 100 * y);
+  Imf::FrameBuffer frame;
+  // OpenEXR addresses pixel (x, y) at base + x * xStride + y * yStride.
+  char* base = reinterpret_cast<char*>(samples.data()) - (static_cast<ptrdiff_t>(x0) + static_cast<ptrdiff_t>(y0) * w) * static_cast<ptrdiff_t>(sizeof(float));
+  frame.insert("Y", Imf::Slice(Imf::FLOAT, base, sizeof(float), sizeof(float) * static_cast<size_t>(w)));
+  Imf::OutputFile file(path.c_str(), header);
+  file.setFrameBuffer(frame);
+  file.writePixels(h);
+}
+
+// A cropped map (data window inside the display window) is read at the display window's size
+// with its samples where they belong and zeros around; overscan (data beyond the display
+// window) is cut away; a display window away from the origin is the frame all the same.
+TEST(ImageIo, DataWindowIsPlacedInTheDisplayWindow) {
+  test::TempDir dir;
+  auto expect_frame = [](const Image& img, int fx0, int fy0, int x0, int y0, int x1, int y1, const char* what) {
+    for (int y = 0; y < img.height; ++y)
+      for (int x = 0; x < img.width; ++x) {
+        const int px = x + fx0, py = y + fy0;  // the file's pixel coordinates
+        const bool data = px >= x0 && px <= x1 && py >= y0 && py <= y1;
+        EXPECT_EQ(img.at(x, y), data ? static_cast<float>(1 + px + 100 * py) : 0.0f) << what << " at " << x << ", " << y;
+      }
+  };
+  write_windowed_exr(dir / "crop.exr", 0, 0, 7, 5, 2, 1, 4, 3);
+  Image img = read_image(dir / "crop.exr");
+  ASSERT_EQ(img.width, 8);
+  ASSERT_EQ(img.height, 6);
+  ASSERT_EQ(img.channels, 1);
+  expect_frame(img, 0, 0, 2, 1, 4, 3, "crop");
+
+  write_windowed_exr(dir / "overscan.exr", 0, 0, 3, 3, -2, -1, 5, 6);
+  img = read_image(dir / "overscan.exr");
+  ASSERT_EQ(img.width, 4);
+  ASSERT_EQ(img.height, 4);
+  expect_frame(img, 0, 0, -2, -1, 5, 6, "overscan");
+
+  write_windowed_exr(dir / "offset.exr", 10, 20, 14, 23, 12, 19, 20, 21);  // partly above and right of the frame
+  img = read_image(dir / "offset.exr");
+  ASSERT_EQ(img.width, 5);
+  ASSERT_EQ(img.height, 4);
+  expect_frame(img, 10, 20, 12, 19, 20, 21, "offset");
+
+  write_windowed_exr(dir / "apart.exr", 0, 0, 3, 3, 10, 10, 12, 12);  // no overlap: all zero
+  img = read_image(dir / "apart.exr");
+  ASSERT_EQ(img.width, 4);
+  expect_frame(img, 0, 0, 10, 10, 12, 12, "apart");
 }
 
 TEST(ImageIo, HalfExrKeepsHalfPrecision) {
