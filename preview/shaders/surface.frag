@@ -109,10 +109,14 @@ void main() {
     // Section 4.1.4: the plane through (u, v, h) with the normal-map normal, offset-limited.
     uv = v_uv + height_at(v_uv) * normal_search_at(v_uv).z * to_eye_uvh.xy;
   } else if (u_method == kIterativeParallax && facing) {
-    // Section 4.2.1: repeat the slope step from the point reached on the ray.
+    // Section 4.2.1: repeat the slope step from the point reached on the ray. A step scales
+    // the height error by 1 - n_z V_z, which diverges once V_z exceeds 2 / n_z: V_z, the
+    // height per unit length, exceeds 1 where the normal leans off the triangle (up to 20 at
+    // uvh_from_object's limit), so the step goes along the same ray scaled to V_z <= 1.
+    vec3 step_uvh = to_eye_uvh / max(to_eye_uvh.z, 1.0);
     vec3 uvh = vec3(v_uv, 0.0);
     for (int i = 0; i < max(u_iterations, 1); ++i) {
-      uvh += (height_at(uvh.xy) - uvh.z) * normal_search_at(uvh.xy).z * to_eye_uvh;
+      uvh += (height_at(uvh.xy) - uvh.z) * normal_search_at(uvh.xy).z * step_uvh;
     }
     uv = uvh.xy;
   } else if ((u_method == kSteep || u_method == kRelief || u_method == kPom) && facing) {
@@ -194,10 +198,12 @@ void main() {
 
   // The visible point's depth, so that displaced surfaces intersect each other correctly (the
   // point where the view ray is at the visible point's height: exact for the search methods,
-  // the parallax family's estimate for the others).
+  // the parallax family's estimate for the others). Beyond the far plane it is held just in
+  // front of it: the cleared depth, 1, would hide the pixel (a hole where a nearly grazing
+  // height rate put the parallax family's estimate far behind the surface).
   if (facing && u_method != kMesh && u_method != kTessellation && u_method != kDstream && u_method != kBump) {
     vec4 clip = u_view_projection * vec4(v_position + view * (height_lookup(uv) / dir.z), 1.0);
-    if (clip.w > 0.0) gl_FragDepth = clamp(0.5 * clip.z / clip.w + 0.5, 0.0, 1.0);
+    if (clip.w > 0.0) gl_FragDepth = clamp(0.5 * clip.z / clip.w + 0.5, 0.0, 0.99999994);
   }
 
   out_fetches = vec2(float(g_fetches) + amortised_fetches, 1.0);

@@ -278,6 +278,66 @@ TEST(Preview, EveryMethodIsStableStraightOnAndGrazing) {
   }
 }
 
+// The per-pixel rays' frame (each triangle's dp/du and dp/dv with the interpolated normal)
+// has fallbacks: a triangle whose UVs have no area, or collinear ones, has no dp/du; a normal
+// that lies almost in its triangle's plane makes the frame singular. Neither may leave a
+// hole (the parallax family's depth estimate had fallen behind the far plane: 24 pixels of
+// offset limiting before the frame changed, 6 after) or a non-finite pixel, nor may normals
+// that lean far but not that far (iterative parallax, whose steps assumed a height rate of at
+// most 1, diverged: maps away, or NaN).
+TEST(Preview, DegenerateUvsAndNormalsInTheTrianglesPlaneStayFinite) {
+  Mesh grid = test::make_grid(2, 2);
+  int face = 0;
+  for (auto f : grid.faces()) {
+    int corner = 0;
+    for (auto h : grid.fh_range(f)) {
+      if (face == 0) grid.set_texcoord2D(h, Vec2f(0.3f, 0.3f));  // one point
+      if (face == 1) grid.set_texcoord2D(h, Vec2f(0.2f + 0.1f * static_cast<float>(corner), 0.6f));  // one line
+      ++corner;
+    }
+    ++face;
+  }
+  // Every normal leans 80 degrees off the grid's plane (seen straight on, a ray climbs 5.8
+  // units of height per unit of length), the centre's 89.4 degrees (the frame's fallback).
+  for (auto v : grid.vertices()) grid.set_normal(v, Vec3f(0.0f, std::sin(80.0f * kPi / 180), std::cos(80.0f * kPi / 180)));
+  grid.set_normal(VertexHandle(4), Vec3f(1.0f, 0.0f, 0.01f).normalized());
+  PreviewMaps maps = maps_with_height([](float u) { return 0.05f * std::sin(20.0f * u); });
+  add_cone_maps(maps, Border::clamp);
+  const HeightField field = make_height_field(maps.displacement, Border::clamp);
+  maps.sdf = distance_field_image(build_distance_field(field, DistanceFieldOptions{}), field);
+  HeadlessPreview gpu(grid, maps);
+  for (float angle : {0.0f, 60.0f, 89.9f}) {
+    PreviewOptions o;
+    o.width = o.height = 32;
+    o.camera.view_angle = angle;
+    o.camera.azimuth = 20.0f;
+    o.iterations = 64;
+    o.method = "bump";
+    const Image base = gpu.render(o);
+    for (const auto& method : preview_methods()) {
+      if (method == "mesh" || method == "tessellation" || method == "dstream" || method == "vdm") continue;
+      o.method = method;
+      for (PreviewShade shade : {PreviewShade::lit, PreviewShade::uv}) {
+        o.shade = shade;
+        const Image img = gpu.render(o);
+        size_t holes = 0, bad = 0;
+        for (size_t i = 0; i < img.texel_count(); ++i) {
+          for (int c = 0; c < 4; ++c) bad += !std::isfinite(img.pixels[4 * i + static_cast<size_t>(c)]);
+          holes += img.pixels[4 * i + 3] <= 0.5f && base.pixels[4 * i + 3] > 0.5f;
+          // The methods that step by the height (offset limiting, slope, iterative parallax)
+          // stay within reach of their base point; a diverging iteration lands maps away.
+          // (Parallax and the searches may go far where the height rate nearly vanishes.)
+          if (shade == PreviewShade::uv && img.pixels[4 * i + 3] > 0.5f &&
+              (method == "offset-limited" || method == "slope" || method == "iterative-parallax"))
+            bad += std::abs(img.pixels[4 * i] - 0.5f) > 1.5f || std::abs(img.pixels[4 * i + 1] - 0.5f) > 1.5f;
+        }
+        EXPECT_EQ(bad, 0u) << method << " at " << angle << (shade == PreviewShade::uv ? " uv" : " lit");
+        EXPECT_EQ(holes, 0u) << method << " at " << angle;
+      }
+    }
+  }
+}
+
 TEST(Preview, MethodsNeedTheirStreams) {
   const Mesh quad = test::make_grid(1, 1);
   PreviewMaps maps = maps_with_height([](float u) { return 0.1f * u; });
