@@ -191,18 +191,23 @@ Image read_level(OIIO::ImageInput& in, const std::string& name, int level, int s
 }
 
 
-// An image whose data window is not its display window (a compositor's auto-crop, or
-// overscan; any format OIIO reads offsets for) is placed in its display window, the frame the
-// UVs map: samples outside the data window are zero (OpenEXR's meaning of "no data"), and
-// data outside the display window is cut away. Without this a cropped map was read at the
-// crop's size and stretched over the whole UV square.
+// An OpenEXR image whose data window is not its display window (a compositor's auto-crop, or
+// overscan) is placed in its display window, the frame the UVs map: samples outside the data
+// window are zero (OpenEXR's meaning of "no data"), and data outside the display window is
+// cut away. Without this a cropped map was read at the crop's size and stretched over the
+// whole UV square. Only OpenEXR: OIIO reports a PNG's oFFs (or a TIFF's position) as a data
+// window offset with a display window of the data's own size at the origin, which would
+// shift the image out of its frame; those offsets are placements on a page, not crops.
 Image in_display_window(Image data, const OIIO::ImageSpec& spec, const std::string& name) {
   if (spec.x == spec.full_x && spec.y == spec.full_y && spec.width == spec.full_width && spec.height == spec.full_height) return data;
   if (spec.full_width <= 0 || spec.full_height <= 0) return data;  // no display window recorded
-  const double bytes = static_cast<double>(spec.full_width) * spec.full_height * data.channels * sizeof(float), memory = physical_memory_bytes();
+  // Both images are held while the data is placed.
+  const double bytes = (static_cast<double>(spec.full_width) * spec.full_height + static_cast<double>(data.width) * data.height) *
+                       data.channels * sizeof(float);
+  const double memory = physical_memory_bytes();
   if (memory > 0 && bytes > memory) {
     char text[200];
-    std::snprintf(text, sizeof text, "its display window is %d x %d pixels of %d channels: %.1f GB as floats, more than this machine's %.1f GB",
+    std::snprintf(text, sizeof text, "placing its data in its display window of %d x %d pixels of %d channels needs %.1f GB as floats, more than this machine's %.1f GB",
                   spec.full_width, spec.full_height, data.channels, bytes / 1e9, memory / 1e9);
     throw InputError(name, text);
   }
@@ -225,6 +230,7 @@ Image in_display_window(Image data, const OIIO::ImageSpec& spec, const std::stri
 Image read_image(const fs::path& path) {
   auto in = open_input(path);
   Image data = read_level(*in, path.string(), 0);
+  if (std::string(in->format_name()) != "openexr") return data;
   return in_display_window(std::move(data), in->spec(), path.string());
 }
 

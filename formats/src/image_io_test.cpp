@@ -24,6 +24,20 @@
 namespace meso {
 namespace {
 
+// CRC-32 of a PNG chunk's type and data (PNG's, reflected 0xEDB88320).
+uint32_t png_crc(const std::string& type_and_data) {
+  uint32_t crc = 0xFFFFFFFFu;
+  for (unsigned char byte : type_and_data) {
+    crc ^= byte;
+    for (int k = 0; k < 8; ++k) crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
+  }
+  return crc ^ 0xFFFFFFFFu;
+}
+
+std::string big_endian(uint32_t v) {
+  return {static_cast<char>(v >> 24), static_cast<char>((v >> 16) & 0xFF), static_cast<char>((v >> 8) & 0xFF), static_cast<char>(v & 0xFF)};
+}
+
 Image ramp(int w, int h, int c) {
   Image img(w, h, c);
   for (int y = 0; y < h; ++y)
@@ -269,13 +283,7 @@ TEST(ImageIo, HeadersThatClaimTooMuchAndNonFilesAreRefused) {
   std::string png = test::read_text(dir / "small.png");
   ASSERT_EQ(png.substr(12, 4), "IHDR");
   for (size_t i : {16u, 20u}) png.replace(i, 4, std::string("\x00\x0F\x42\x40", 4));  // width, height 1,000,000: 12 TB as floats
-  uint32_t crc = 0xFFFFFFFFu;  // CRC-32 of the chunk's type and data (PNG's, reflected 0xEDB88320)
-  for (size_t i = 12; i < 12 + 4 + 13; ++i) {
-    crc ^= static_cast<unsigned char>(png[i]);
-    for (int k = 0; k < 8; ++k) crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
-  }
-  crc ^= 0xFFFFFFFFu;
-  for (int k = 0; k < 4; ++k) png[29 + static_cast<size_t>(k)] = static_cast<char>((crc >> (24 - 8 * k)) & 0xFF);
+  png.replace(29, 4, big_endian(png_crc(png.substr(12, 4 + 13))));
   test::write_text(dir / "huge.png", png);
   try {
     read_image(dir / "huge.png");
@@ -380,6 +388,19 @@ TEST(ImageIo, DataWindowIsPlacedInTheDisplayWindow) {
   img = read_image(dir / "apart.exr");
   ASSERT_EQ(img.width, 4);
   expect_frame(img, 0, 0, 10, 10, 12, 12, "apart");
+
+  // A PNG's oFFs chunk (ImageMagick's crops, GIMP's layer offsets) places the image on a
+  // page: it is read as it is, not moved out of its own frame.
+  const Image small = ramp(5, 3, 1);
+  write_image(small, dir / "page.png", PixelFormat::uint16);
+  std::string png = test::read_text(dir / "page.png");
+  const std::string offs = std::string("oFFs") + big_endian(5) + big_endian(7) + std::string(1, '\0');  // (5, 7) pixels
+  png.insert(8 + 25, big_endian(9) + offs + big_endian(png_crc(offs)));  // after the signature and IHDR
+  test::write_text(dir / "page.png", png);
+  img = read_image(dir / "page.png");
+  ASSERT_EQ(img.width, 5);
+  ASSERT_EQ(img.height, 3);
+  for (size_t i = 0; i < small.pixels.size(); ++i) EXPECT_NEAR(img.pixels[i], small.pixels[i], 1.0 / 65535) << i;
 }
 
 TEST(ImageIo, HalfExrKeepsHalfPrecision) {

@@ -12,9 +12,10 @@ namespace meso {
 
 enum class PixelFormat { float32, half, uint8, uint16 };
 
-// Reads any image OIIO understands into float samples (integer formats map to [0,1]), at
-// the size of its display window: where the data window differs (a cropped EXR, overscan),
-// samples outside it read 0 and data outside the display window is dropped.
+// Reads any image OIIO understands into float samples (integer formats map to [0,1]). An
+// OpenEXR image is read at the size of its display window: where the data window differs (a
+// cropped EXR, overscan), samples outside it read 0 and data outside the display window is
+// dropped. Other formats' page offsets (a PNG's oFFs) are ignored.
 // Throws InputError naming the file if it is missing, unreadable or not an image.
 Image read_image(const std::filesystem::path& path);
 
