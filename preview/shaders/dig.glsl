@@ -58,13 +58,13 @@ float dig_gap(DigRay r, float s) { return r.dir.z * s + r.bend * s * s - height_
 // Linear-search steps over the whole slab, both passes: view_adapted_steps of the budget. A
 // corner ray and the pixel rays of its block look almost the same way, so their counts differ
 // by at most one (dig_trace widens its interval by a corner ray's step for that).
-int dig_steps(vec3 dir) { return view_adapted_steps(u_iterations, dir); }
+int dig_steps() { return view_adapted_steps(u_iterations); }
 
 // Pass 1: the steep-parallax linear search (4.3.1) over the whole slab; the normalised depth
 // of the last sample above the surface (1 when the first is already below).
 float dig_corner_depth(vec3 dir, float bend) {
   DigRay r = dig_ray(dir, bend);
-  int steps = dig_steps(dir);
+  int steps = dig_steps();
   float z_above = 1.0;
   for (int i = 0; i <= steps; ++i) {
     float z = 1.0 - float(i) / float(steps);
@@ -89,7 +89,7 @@ float dig_trace(vec3 dir, float bend, vec2 uv_dx, vec2 uv_dy, out float amortise
     lo = min(lo, corner.r);
     hi = max(hi, corner.r);
   }
-  int steps = dig_steps(dir);
+  int steps = dig_steps();
   float step = 1.0 / float(steps);
   // epsilon_1 and epsilon_2 cover one step of the corner rays' search, whose count was
   // rounded from their own directions (dig_steps): up to one fewer than this pixel's.

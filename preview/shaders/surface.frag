@@ -14,17 +14,16 @@
 // methods' draws) or M is nearly singular (nn within ~3 degrees of the triangle's plane).
 mat3 uvh_from_object(vec3 tn, vec3 bn, vec3 nn) {
   mat3 frame = transpose(mat3(tn / max(v_uv_scale.x, 1e-20), bn / max(v_uv_scale.y, 1e-20), nn));
-  if (u_face_jacobians == 0 || gl_PrimitiveID < 0 || 2 * gl_PrimitiveID + 1 >= face_jacobian.length()) return frame;
-  vec4 du = face_jacobian[2 * gl_PrimitiveID], dv = face_jacobian[2 * gl_PrimitiveID + 1];
-  float lu = length(du.xyz), lv = length(dv.xyz);
-  if (du.w == 0.0 || !(lu > 0.0) || !(lv > 0.0)) return frame;
-  // M^-1 by cofactors, with J's columns normalised first (no float overflow or underflow
-  // for huge or tiny meshes): rows (b x n, n x a, a x b) / det, det = a . (b x n).
-  vec3 a = du.xyz / lu, b = dv.xyz / lv;
-  vec3 ab = cross(a, b);
-  float det = dot(nn, ab);
-  if (!(abs(det) > 0.05 * length(ab))) return frame;
-  return transpose(mat3(cross(b, nn) / (det * lu), cross(nn, a) / (det * lv), ab / det));
+  if (u_face_jacobians == 0 || gl_PrimitiveID < 0 || 3 * gl_PrimitiveID + 2 >= face_jacobian.length()) return frame;
+  vec4 du = face_jacobian[3 * gl_PrimitiveID], dv = face_jacobian[3 * gl_PrimitiveID + 1];
+  vec4 ab = face_jacobian[3 * gl_PrimitiveID + 2];
+  if (ab.w == 0.0) return frame;
+  // M^-1 by cofactors, with J's columns as unit directions a, b and lengths lu, lv (no float
+  // overflow or underflow for huge or tiny meshes): rows (b x n / lu, n x a / lv, a x b) / det,
+  // det = n . (a x b).
+  float det = dot(nn, ab.xyz);
+  if (!(abs(det) > 0.05 * length(ab.xyz))) return frame;
+  return transpose(mat3(cross(dv.xyz, nn) / (det * du.w), cross(nn, du.xyz) / (det * dv.w), ab.xyz / det));
 }
 
 // Self-shadowing (survey section 6): the fraction of the light seen from the visible point
@@ -85,19 +84,24 @@ void main() {
   vec3 view = normalize(v_position - u_eye);  // from the eye toward the surface
   mat3 to_uvh = uvh_from_object(tn, bn, nn);
   vec3 dir = to_uvh * view;  // the view ray's advance per unit length in (u, v, h)
-  // The unit vector toward the viewer (the survey's V), per unit length in (u, v, h).
-  vec3 to_eye_uvh = -dir;
+  // Per unit length the ray rises dir.z along nn while its base point moves by across (J
+  // dir.xy): sin(theta) = |across| and cos(theta) = -dir.z in an orthonormal frame. Where nn
+  // leans off the triangle the two are not orthogonal; the parallax family, the adaptive step
+  // counts and the silhouettes' bend take them as if they were, over the base: the survey's
+  // unit V toward the eye is -dir / ray_length, its V_z <= 1.
+  vec3 across = view - dir.z * nn;
+  float ray_length = sqrt(dir.z * dir.z + dot(across, across));
+  g_view_cos = ray_length > 0.0 ? -dir.z / ray_length : 0.0;
+  vec3 to_eye_uvh = ray_length > 0.0 ? -dir / ray_length : vec3(0.0);
 
   vec2 uv = v_uv;
   float amortised_fetches = 0.0;  // a share of work done outside this fragment (DIG's grid pass)
   bool facing = dir.z < -1e-6;  // grazing or back-facing rays keep the base point
   // With silhouettes on a curved base (section 5.1) the base falls away from the tangent
   // plane by c x^2 / 2 at horizontal distance x, c the curvature along the view: the ray's
-  // height over the bent base is z(s) = dir.z s + bend s^2, bend = c sin^2(theta) / 2.
-  // (sin(theta) from the normal: dir.z, the height per unit length, exceeds 1 where nn leans
-  // off the triangle's plane.)
-  float cos_view = dot(view, nn);
-  float bend = u_silhouettes != 0 ? 0.5 * view_curvature(view, nn) * (1.0 - cos_view * cos_view) : 0.0;
+  // height over the bent base is z(s) = dir.z s + bend s^2, bend = c |across|^2 / 2 (x = s
+  // |across|; sin^2(theta) in an orthonormal frame).
+  float bend = u_silhouettes != 0 ? 0.5 * view_curvature(view, nn) * dot(across, across) : 0.0;
   bool escaped = false;  // a safe method's ray left the surface without a hit
   if (u_method == kParallax && facing) {
     // Section 4.1.2: assume the height at (u, v) holds everywhere.
@@ -110,13 +114,11 @@ void main() {
     uv = v_uv + height_at(v_uv) * normal_search_at(v_uv).z * to_eye_uvh.xy;
   } else if (u_method == kIterativeParallax && facing) {
     // Section 4.2.1: repeat the slope step from the point reached on the ray. A step scales
-    // the height error by 1 - n_z V_z, which diverges once V_z exceeds 2 / n_z: V_z, the
-    // height per unit length, exceeds 1 where the normal leans off the triangle (up to 20 at
-    // uvh_from_object's limit), so the step goes along the same ray scaled to V_z <= 1.
-    vec3 step_uvh = to_eye_uvh / max(to_eye_uvh.z, 1.0);
+    // the height error by 1 - n_z V_z: it converges because V_z <= 1 (with dir itself, whose
+    // height rate reaches 20 where the normal leans off the triangle, it diverged).
     vec3 uvh = vec3(v_uv, 0.0);
     for (int i = 0; i < max(u_iterations, 1); ++i) {
-      uvh += (height_at(uvh.xy) - uvh.z) * normal_search_at(uvh.xy).z * step_uvh;
+      uvh += (height_at(uvh.xy) - uvh.z) * normal_search_at(uvh.xy).z * to_eye_uvh;
     }
     uv = uvh.xy;
   } else if ((u_method == kSteep || u_method == kRelief || u_method == kPom) && facing) {
@@ -131,7 +133,7 @@ void main() {
     bool escapes;
     ray_slab(dir, bend, s_in, s_out, escapes);
     // POM adapts its step count to the view (section 4.4.2); steep and relief take the budget.
-    int steps = u_method == kPom ? view_adapted_steps(u_iterations, dir) : max(u_iterations, 1);
+    int steps = u_method == kPom ? view_adapted_steps(u_iterations) : max(u_iterations, 1);
     float s_prev = s_in;
     float d_prev = dir.z * s_in + bend * s_in * s_in - height_at(v_uv + dir.xy * s_in);  // ray height minus surface height
     float s_hit = s_out;

@@ -19,9 +19,10 @@ in vec2 v_uv;
 in vec2 v_uv_scale;
 
 // Per base triangle, read at gl_PrimitiveID when u_face_jacobians is 1 (the per-pixel
-// methods' draw of the base, whose primitive t is face t): dp/du in .xyz of entry 2t, dp/dv
-// in .xyz of entry 2t + 1, object units per UV unit; .w of entry 2t is 0 where the
-// triangle's UVs are degenerate (renderer.cpp, face_jacobians()).
+// methods' draw of the base, whose primitive t is face t), entries 3t to 3t + 2: the unit
+// directions a, b of dp/du and dp/dv with their lengths (object units per UV unit) in .w,
+// then a x b (made in double) with .w 0 where the triangle's UVs are degenerate
+// (renderer.cpp, face_jacobians()).
 layout(std430, binding = 3) readonly buffer FaceJacobians { vec4 face_jacobian[]; };
 uniform int u_face_jacobians;
 
@@ -69,13 +70,17 @@ const int kMesh = 0, kTessellation = 1, kBump = 2, kParallax = 3, kOffsetLimited
 uniform int u_binary_steps;      // relief: halvings after the linear search (PreviewOptions::binary_steps)
 uniform int u_bisection_steps;   // relaxed-cone: halvings of the step that crossed the surface
 
+// The cosine of the view ray's angle from the base normal as the parallax family and the
+// adaptive step counts take it: its height rate over its length, with the height and the base
+// point's motion taken as orthogonal (set by surface.frag's main; 1 straight on, 0 grazing).
+float g_view_cos = 1.0;
+
 // Linear-search steps over the whole slab, adapted to the view (survey section 4.4.2, POM
 // after Tatarchuk; DIG-DM's "adaptive linear search", its section 5): the budget at grazing
-// angles, a quarter of it straight on, where a ray crosses few texels. dir: the unit view
-// ray in tangent space (dir.z < 0 going into the surface).
-int view_adapted_steps(int budget, vec3 dir) {
+// angles, a quarter of it straight on, where a ray crosses few texels.
+int view_adapted_steps(int budget) {
   float b = float(max(budget, 1));
-  return max(1, int(round(mix(b, max(0.25 * b, 1.0), clamp(-dir.z, 0.0, 1.0)))));
+  return max(1, int(round(mix(b, max(0.25 * b, 1.0), clamp(g_view_cos, 0.0, 1.0)))));
 }
 // Halvings of a cell's root interval where rounding hid a quadratic's root (footprint.glsl):
 // numerical, not a quality knob (2^-24 of the step: float's resolution).

@@ -7,9 +7,9 @@
 // d = mean[dir] + sum_k w_k(texel) basis_k[dir].
 //
 // Geometry (vdm.hpp): the table's box is 1 wide in u, H/W deep, `relief` high, all in units
-// of u (texels square). A view ray per unit object length advances dot(V,t)/|dp/du| in u,
-// dot(V,b)/|dp/dv| in v, i.e. (H/W) dot(V,b)/|dp/dv| in units of u, and dot(V,n) in object
-// height, i.e. dot(V,n) relief/scale in units of u; theta and phi are measured in that box.
+// of u (texels square). A view ray per unit object length advances dir = (du, dv, dh)
+// (surface.frag's uvh_from_object), i.e. du and (H/W) dv in units of u, and dh in object
+// height, i.e. dh relief/scale in units of u; theta and phi are measured in that box.
 // Curvature along the view direction (survey eq. 13 and Euler's theorem): with the principal
 // curvatures k1 >= k2 along d1, d2 and alpha the angle of the view's horizontal direction from
 // d1, c = k1 cos^2(alpha) + k2 sin^2(alpha) per object unit, times the object length of one
@@ -67,8 +67,9 @@ bool vdm_trace(vec3 view, vec3 tn, vec3 bn, vec3 nn, vec3 dir, out vec2 uv) {
   float phi = atan(h.y, h.x);
   if (phi < 0.0) phi += 6.28318531;
 
-  // Curvature along the view direction, per unit of u.
-  vec3 across = view - nn * dot(view, nn);
+  // Curvature along the view direction, per unit of u: the base point moves by across (J
+  // dir.xy) per unit length of the ray while the ray advances len_h in units of u.
+  vec3 across = view - nn * dir.z;
   float object_per_u = len_h > 1e-20 ? length(across) / len_h : v_uv_scale.x;
   float c = view_curvature(view, nn) * object_per_u;
 

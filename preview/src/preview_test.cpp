@@ -314,6 +314,8 @@ TEST(Preview, DegenerateUvsAndNormalsInTheTrianglesPlaneStayFinite) {
     o.iterations = 64;
     o.method = "bump";
     const Image base = gpu.render(o);
+    o.shade = PreviewShade::uv;
+    const Image base_uv = gpu.render(o);
     for (const auto& method : preview_methods()) {
       if (method == "mesh" || method == "tessellation" || method == "dstream" || method == "vdm") continue;
       o.method = method;
@@ -330,6 +332,11 @@ TEST(Preview, DegenerateUvsAndNormalsInTheTrianglesPlaneStayFinite) {
           if (shade == PreviewShade::uv && img.pixels[4 * i + 3] > 0.5f &&
               (method == "offset-limited" || method == "slope" || method == "iterative-parallax"))
             bad += std::abs(img.pixels[4 * i] - 0.5f) > 1.5f || std::abs(img.pixels[4 * i + 1] - 0.5f) > 1.5f;
+          // Offset limiting (and slope, which scales it by n_z <= 1) moves the visible point by
+          // at most the height, 0.05 object units, along the base: 0.05 in UV on this grid,
+          // where UV is position (it moved 0.28 when the lean made V_z 5.8).
+          if (shade == PreviewShade::uv && img.pixels[4 * i + 3] > 0.5f && (method == "offset-limited" || method == "slope"))
+            bad += std::hypot(img.pixels[4 * i] - base_uv.pixels[4 * i], img.pixels[4 * i + 1] - base_uv.pixels[4 * i + 1]) > 0.0501;
         }
         EXPECT_EQ(bad, 0u) << method << " at " << angle << (shade == PreviewShade::uv ? " uv" : " lit");
         EXPECT_EQ(holes, 0u) << method << " at " << angle;

@@ -545,28 +545,32 @@ int subdivide_for_mesh(const std::vector<float>& verts, const std::vector<uint32
 
 // Per triangle of `tris`, the derivatives of position by UV, dp/du and dp/dv (object units per
 // UV unit), from the per-corner floats the vertex shader reads (position at 0, UV at 6 of
-// each `stride`): 8 floats per triangle, (dp/du, valid) and (dp/dv, 0), the layout of
-// surface_common.glsl's FaceJacobians. Exact, since UVs are affine over a triangle:
-// [e1 e2] = J [f1 f2] for the edges e in space and f in UV, so J = [e1 e2] [f1 f2]^-1,
-// in double. Valid = 0 where the UV triangle has no area (J is then undefined).
+// each `stride`), in the layout of surface_common.glsl's FaceJacobians: 12 floats per
+// triangle, (a, |dp/du|), (b, |dp/dv|), (a x b, valid) with a and b the unit directions of
+// dp/du and dp/dv. Exact, since UVs are affine over a triangle: [e1 e2] = J [f1 f2] for the
+// edges e in space and f in UV, so J = [e1 e2] [f1 f2]^-1. In double, the cross product too:
+// on a sliver of UV space a and b are nearly parallel, and a float cross product of them
+// (the shader's) loses its direction. Valid = 0 where the UV triangle has no area.
 std::vector<float> face_jacobians(const std::vector<float>& verts, const std::vector<uint32_t>& tris, size_t stride) {
-  std::vector<float> out(tris.size() / 3 * 8, 0.0f);
+  std::vector<float> out(tris.size() / 3 * 12, 0.0f);
   for (size_t t = 0; t < tris.size() / 3; ++t) {
     const float* c[3] = {&verts[tris[3 * t] * stride], &verts[tris[3 * t + 1] * stride], &verts[tris[3 * t + 2] * stride]};
     const double f1u = static_cast<double>(c[1][6]) - c[0][6], f1v = static_cast<double>(c[1][7]) - c[0][7];
     const double f2u = static_cast<double>(c[2][6]) - c[0][6], f2v = static_cast<double>(c[2][7]) - c[0][7];
     const double det = f1u * f2v - f2u * f1v;
     if (!(std::abs(det) > 1e-12 * std::hypot(f1u, f1v) * std::hypot(f2u, f2v))) continue;
-    float* o = &out[t * 8];
+    OpenMesh::Vec3d du, dv;
     for (int k = 0; k < 3; ++k) {
       const double e1 = static_cast<double>(c[1][k]) - c[0][k], e2 = static_cast<double>(c[2][k]) - c[0][k];
       // [f1 f2]^-1 = [[f2v, -f2u], [-f1v, f1u]] / det.
-      o[k] = static_cast<float>((e1 * f2v - e2 * f1v) / det);
-      o[4 + k] = static_cast<float>((e2 * f1u - e1 * f2u) / det);
+      du[k] = (e1 * f2v - e2 * f1v) / det;
+      dv[k] = (e2 * f1u - e1 * f2u) / det;
     }
-    const bool finite = std::all_of(o, o + 3, [](float v) { return std::isfinite(v); }) &&
-                        std::all_of(o + 4, o + 7, [](float v) { return std::isfinite(v); });
-    o[3] = finite ? 1.0f : 0.0f;
+    const double lu = du.norm(), lv = dv.norm();
+    if (!(lu > 0 && lv > 0 && std::isfinite(lu) && std::isfinite(lv) && lu < 1e38 && lv < 1e38)) continue;
+    const OpenMesh::Vec3d a = du / lu, b = dv / lv, ab = OpenMesh::cross(a, b);
+    const double values[12] = {a[0], a[1], a[2], lu, b[0], b[1], b[2], lv, ab[0], ab[1], ab[2], 1.0};
+    std::transform(values, values + 12, &out[t * 12], [](double v) { return static_cast<float>(v); });
   }
   return out;
 }
@@ -640,8 +644,8 @@ SurfaceRenderer::SurfaceRenderer(const Mesh& base, const PreviewMaps& maps) : ba
     const std::vector<float> jacobians = face_jacobians(verts, split.triangles, kStride);
     glGenBuffers(1, &face_jacobians_);
     glBindBuffer(GL_SHADER_STORAGE_BUFFER, face_jacobians_);
-    // An empty mesh still gets a buffer to bind (one invalid entry pair).
-    const std::vector<float> none(8, 0.0f);
+    // An empty mesh still gets a buffer to bind (one invalid entry).
+    const std::vector<float> none(12, 0.0f);
     const std::vector<float>& data = jacobians.empty() ? none : jacobians;
     glBufferData(GL_SHADER_STORAGE_BUFFER, static_cast<GLsizeiptr>(data.size() * sizeof(float)), data.data(), GL_STATIC_DRAW);
   }
