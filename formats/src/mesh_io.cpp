@@ -795,7 +795,17 @@ Mesh read_mesh(const fs::path& path, MeshReadReport* report) {
   const std::string obj_text = obj ? file_text(path, name) : std::string();
   const ObjScan obj_scan = obj ? check_obj_lines(obj_text, name) : ObjScan();
   if (lower_ext(path) == ".ply") check_ply(file_text(path, name), name);
-  if (lower_ext(path) == ".gltf" || lower_ext(path) == ".glb") check_gltf(file_text(path, name), name);
+  if (lower_ext(path) == ".gltf" || lower_ext(path) == ".glb") {
+    // assimp picks the glTF reader by the extension and refused a mislabelled file with "No
+    // suitable reader found"; the content says which it is (a binary glTF starts "glTF").
+    const std::string text = file_text(path, name);
+    const bool binary = text.compare(0, 4, "glTF") == 0;
+    const size_t first = text.find_first_not_of(" \t\r\n");
+    if (lower_ext(path) == ".glb" && !binary && first != std::string::npos && text[first] == '{')
+      throw InputError(name, "is a text (JSON) glTF, not a binary one: name it .gltf");
+    if (lower_ext(path) == ".gltf" && binary) throw InputError(name, "is a binary glTF: name it .glb");
+    check_gltf(text, name);
+  }
   // A UTF-8 byte-order mark (some Windows tools write one) hides the OBJ's first line from
   // assimp, which then reports an index out of range: such a file is read from memory, past
   // the mark (its material library, which meso does not use, is then not looked for).

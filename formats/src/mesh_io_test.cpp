@@ -315,6 +315,18 @@ TEST(MeshIo, GarbageIsAnInputError) {
   }
 }
 
+// A glTF whose extension says the other kind (text named .glb, binary named .gltf) is refused
+// naming what it is; assimp had said "No suitable reader found for the file format".
+TEST(MeshIo, MislabelledGltfIsNamed) {
+  test::TempDir dir;
+  write_mesh(test::make_seamed_cube(), dir / "cube.glb");
+  write_mesh(test::make_seamed_cube(), dir / "cube.gltf");
+  std::filesystem::copy_file(dir / "cube.gltf", dir / "text.glb");
+  std::filesystem::copy_file(dir / "cube.glb", dir / "binary.gltf");
+  expect_refused(dir / "text.glb", (dir / "text.glb").string() + ": is a text (JSON) glTF, not a binary one: name it .gltf");
+  expect_refused(dir / "binary.gltf", (dir / "binary.gltf").string() + ": is a binary glTF: name it .glb");
+}
+
 // A binary glTF cut short (a download or copy interrupted) is named as such; assimp had said
 // "No suitable reader found for the file format". The whole file reads.
 TEST(MeshIo, CutShortGlbIsNamed) {
